@@ -1,0 +1,1 @@
+"""singmesh.boxes: Bernstein forms on boxes, the octree, edge roots, face links."""

@@ -1,0 +1,1 @@
+"""singmesh.facets: link cycles per box, their triangulation, mesh assembly."""

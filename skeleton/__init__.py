@@ -1,0 +1,1 @@
+"""singmesh.skeleton: singular points, their classification, skeleton curves."""
