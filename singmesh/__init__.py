@@ -4,3 +4,8 @@ from .errors import SurfaceError
 from .surface import Surface
 
 __all__ = ["Surface", "SurfaceError"]
+
+from .api import mesh  # noqa: E402
+from .mesh import Mesh  # noqa: E402
+
+__all__ += ["mesh", "Mesh"]

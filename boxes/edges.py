@@ -1,0 +1,357 @@
+"""Crossings of the surface with the edges of the leaves.
+
+Roots are computed once per *lattice line* (an axis-parallel line through
+lattice points that carries leaf edges), never per box, so every box and
+face that shares a piece of that line sees the same crossings: no cracks,
+also between boxes of different sizes.
+
+The rule for exact zeros is that of :mod:`singmesh.boxes.octree`: the
+surface meshed is F + eps = 0.  Near a root r of F on a line, F + eps
+crosses zero just left of r (event ``r-``) when F < 0 just left of r, and
+just right of it (``r+``) when F < 0 just right of it.  So a simple root
+gives one event, an edge tangency from below gives two (at the same place),
+one from above none.  A root at a lattice point (F zero there to rounding)
+is snapped onto it, so that every line through that point agrees.
+
+Each event carries the direction in which F + eps changes sign along the
+line (+1 for - to +), which orients the face links.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import comb
+
+from singmesh import tolerances as tol
+
+from .octree import Octree
+
+#: Edges of a unit cube: (axis, offset in the two other axes (cyclic order)).
+_EDGE_OFFSETS = [(a, du, dv) for a in range(3) for du in (0, 1) for dv in (0, 1)]
+#: Stride of the integer key (line, lattice cell) that finds the events of
+#: a segment; lattice coordinates stay below 2**(MAX_LEVEL + 1).
+_LINE_STRIDE = np.int64(1) << (tol.MAX_LEVEL + 2)
+
+
+@dataclass
+class Events:
+    """All crossing events on all lattice lines, sorted by line then position.
+
+    Attributes
+    ----------
+    line : (E,) int64      line index (into ``lines``)
+    pos : (E,) float64     position along the line, lattice units
+    side : (E,) int8       -1 for ``r-``, +1 for ``r+``, 0 for a plain crossing
+    snapped : (E,) bool    whether the root is a lattice point
+    direction : (E,) int8  +1 if F + eps goes from - to + along the line axis
+    key : (E,) int64       vertex identity (lattice point, or root on a line)
+    point : (E, 3) float64 position in space
+    cell_key : (E,) int64  sorted ``line * stride + cell``: the lattice cell
+                           ``[c, c + 1)`` along the line holding the event
+    lines : (L, 3) int64   (axis, u, v) of each line, u/v its fixed coordinates
+    line_keys : (L,) int64 sorted :func:`line_keys` of ``lines``
+    """
+
+    line: np.ndarray
+    pos: np.ndarray
+    side: np.ndarray
+    snapped: np.ndarray
+    direction: np.ndarray
+    key: np.ndarray
+    point: np.ndarray
+    cell_key: np.ndarray
+    lines: np.ndarray
+    line_keys: np.ndarray
+
+    def on_segments(self, axis, u, v, start, end):
+        """Events on axis-parallel lattice segments ``[start, end)``.
+
+        Returns
+        -------
+        seg : (K,) int64   index of the segment each event lies on
+        ev : (K,) int64    event index
+        """
+        q = line_keys(axis, u, v)
+        ids = np.minimum(np.searchsorted(self.line_keys, q), max(len(self.line_keys) - 1, 0))
+        ids = np.where((len(self.line_keys) > 0) & (self.line_keys[ids] == q), ids, -1)
+        lo = np.searchsorted(self.cell_key, ids * _LINE_STRIDE + start, side="left")
+        hi = np.searchsorted(self.cell_key, ids * _LINE_STRIDE + end, side="left")
+        hi = np.where(ids < 0, lo, hi)
+        counts = hi - lo
+        seg = np.repeat(np.arange(len(counts)), counts)
+        first = np.repeat(lo - np.cumsum(counts) + counts, counts)
+        ev = first + np.arange(counts.sum())
+        return seg, ev
+
+
+def line_keys(axis, u, v) -> np.ndarray:
+    return (np.asarray(axis, np.int64) << 40) | (np.asarray(u, np.int64) << 20) | np.asarray(v, np.int64)
+
+
+def leaf_edges(tree: Octree):
+    """All 12 edges of every leaf: (axis, u, v, start, end) in lattice units."""
+    size = tree.size
+    rows = []
+    for a, du, dv in _EDGE_OFFSETS:
+        ua, va = (a + 1) % 3, (a + 2) % 3
+        rows.append(np.stack([
+            np.full(len(size), a),
+            tree.corner[:, ua] + du * size,
+            tree.corner[:, va] + dv * size,
+            tree.corner[:, a],
+            tree.corner[:, a] + size,
+        ], axis=1))
+    return np.concatenate(rows) if rows else np.zeros((0, 5), np.int64)
+
+
+def line_polynomials(coeffs: np.ndarray, axis: int, fixed: np.ndarray) -> np.ndarray:
+    """Power coefficients (in the global coordinate of ``axis``) of F on lines.
+
+    Parameters
+    ----------
+    coeffs : monomial tensor of F
+    axis : the line direction
+    fixed : (L, 2) coordinates of the two other axes (cyclic order)
+
+    Returns
+    -------
+    (L, n_axis + 1) ndarray, lowest power first
+    """
+    ua, va = (axis + 1) % 3, (axis + 2) % 3
+    t = np.moveaxis(coeffs, (axis, ua, va), (0, 1, 2))
+    pu = fixed[:, 0:1] ** np.arange(t.shape[1])
+    pv = fixed[:, 1:2] ** np.arange(t.shape[2])
+    return np.einsum("ijk,lj,lk->li", t, pu, pv, optimize=True)
+
+
+def _rescale(poly: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Coefficients in tau where s = centre + half * tau (rows independent)."""
+    n = poly.shape[1] - 1
+    i = np.arange(n + 1)[None, :, None]
+    j = np.arange(n + 1)[None, None, :]
+    # coefficient of tau^j: sum_i c_i C(i, j) centre^(i-j) half^j
+    m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
+    out = np.einsum("li,lij->lj", poly, m)
+    return out * half[:, None] ** np.arange(n + 1)
+
+
+def _horner(coeffs: np.ndarray, t: np.ndarray):
+    """Values and derivatives of stacked polynomials (lowest power first)."""
+    p = np.zeros_like(t)
+    dp = np.zeros_like(t)
+    for k in range(coeffs.shape[1] - 1, -1, -1):
+        dp = dp * t + p
+        p = p * t + coeffs[:, k]
+    return p, dp
+
+
+def real_roots(tau_poly: np.ndarray, bound: float):
+    """Real roots in [-bound, bound] of stacked polynomials in tau.
+
+    Roots are found as companion-matrix eigenvalues (all of them, so none
+    is missed between sign samples), kept when nearly real, and polished by
+    Newton's method.
+
+    Returns
+    -------
+    row : (R,) int64, root : (R,) float64
+    """
+    rows, roots = [], []
+    scale = np.abs(tau_poly).max(axis=1)
+    nonzero = scale > 0
+    # Effective degree: drop leading coefficients negligible on [-1, 1];
+    # the roots they would add lie far outside the interval.
+    significant = np.abs(tau_poly) > 1e-13 * scale[:, None]
+    degree = np.where(significant.any(axis=1),
+                      tau_poly.shape[1] - 1 - np.argmax(significant[:, ::-1], axis=1), 0)
+    for d in np.unique(degree[nonzero]):
+        if d < 1:
+            continue
+        sel = np.nonzero(nonzero & (degree == d))[0]
+        c = tau_poly[sel, : d + 1] / tau_poly[sel, d : d + 1]
+        comp = np.zeros((len(sel), d, d))
+        comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
+        comp[:, :, -1] = -c[:, :d]
+        eig = np.linalg.eigvals(comp)
+        near = (np.abs(eig.imag) <= tol.ROOT_IMAG) & (np.abs(eig.real) <= bound)
+        r, k = np.nonzero(near)
+        rows.append(sel[r])
+        roots.append(eig.real[r, k])
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0)
+    row = np.concatenate(rows)
+    root = np.concatenate(roots)
+    coeffs = tau_poly[row]
+    for _ in range(tol.NEWTON_ITERATIONS):
+        p, dp = _horner(coeffs, root)
+        ok = np.abs(dp) > 0
+        step = np.where(ok, p / np.where(ok, dp, 1.0), 0.0)
+        # Near a multiple root Newton may overshoot: accept only steps that
+        # do not increase |p|.
+        trial = root - step
+        pt, _ = _horner(coeffs, trial)
+        better = np.abs(pt) <= np.abs(p)
+        root = np.where(better, trial, root)
+    return row, root
+
+
+def compute_events(surface, tree: Octree) -> Events:
+    """Crossing events of F + eps on every lattice line carrying leaf edges."""
+    edges = leaf_edges(tree)
+    keys = line_keys(edges[:, 0], edges[:, 1], edges[:, 2])
+    uniq, inverse = np.unique(keys, return_inverse=True)
+    n_lines = len(uniq)
+    lines = np.zeros((n_lines, 3), np.int64)
+    lines[inverse] = edges[:, :3]
+    lo = np.full(n_lines, np.iinfo(np.int64).max)
+    hi = np.full(n_lines, np.iinfo(np.int64).min)
+    np.minimum.at(lo, inverse, edges[:, 3])
+    np.maximum.at(hi, inverse, edges[:, 4])
+
+    # Lattice points at which F is zero: candidates for snapping.  Every
+    # leaf corner is an end point of leaf edges on all three lines through it.
+    corners = np.unique(np.concatenate([edges[:, [0, 1, 2, 3]], edges[:, [0, 1, 2, 4]]]), axis=0)
+    zero_line, zero_pos = _zero_lattice_points(surface, tree, corners, uniq)
+
+    cell = tree.cell
+    all_line, all_pos, all_snap = [], [], []
+    for a in range(3):
+        sel = np.nonzero(lines[:, 0] == a)[0]
+        if len(sel) == 0:
+            continue
+        ua, va = (a + 1) % 3, (a + 2) % 3
+        fixed = np.stack([tree.box[ua, 0] + lines[sel, 1] * cell[ua],
+                          tree.box[va, 0] + lines[sel, 2] * cell[va]], axis=1)
+        poly = line_polynomials(surface.coeffs, a, fixed)
+        # Work in tau over the line's extent widened by one cell each side,
+        # so the sign samples beyond the outermost roots see no other root.
+        s0 = tree.box[a, 0] + (lo[sel] - 1) * cell[a]
+        s1 = tree.box[a, 0] + (hi[sel] + 1) * cell[a]
+        centre, half = (s0 + s1) / 2, (s1 - s0) / 2
+        tau_poly = _rescale(poly, centre, half)
+        row, root = real_roots(tau_poly, 1.0)
+        pos = (centre[row] + half[row] * root - tree.box[a, 0]) / cell[a]
+        all_line.append(sel[row])
+        all_pos.append(pos)
+        all_snap.append(np.zeros(len(row), bool))
+    all_line.append(zero_line)
+    all_pos.append(zero_pos.astype(float))
+    all_snap.append(np.ones(len(zero_line), bool))
+    line_of = np.concatenate(all_line)
+    pos = np.concatenate(all_pos)
+    snap = np.concatenate(all_snap)
+
+    line_of, pos, snap = _cluster(line_of, pos, snap, lines, tree)
+    return _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap)
+
+
+def _zero_lattice_points(surface, tree, corners, uniq):
+    """(line, position) of every leaf corner where F is zero, on each line through it."""
+    zero = surface.is_zero(tree.lattice_to_space(_corner_xyz(corners)))
+    xyz = _corner_xyz(corners[zero])
+    a = corners[zero, 0]
+    u = xyz[np.arange(len(a)), (a + 1) % 3]
+    v = xyz[np.arange(len(a)), (a + 2) % 3]
+    ids = np.searchsorted(uniq, line_keys(a, u, v))
+    return ids, xyz[np.arange(len(a)), a]
+
+
+def _corner_xyz(corners):
+    """Lattice (x, y, z) of rows (axis, u, v, s) describing a point on a line."""
+    a = corners[:, 0]
+    xyz = np.zeros((len(corners), 3), np.int64)
+    idx = np.arange(len(corners))
+    xyz[idx, a] = corners[:, 3]
+    xyz[idx, (a + 1) % 3] = corners[:, 1]
+    xyz[idx, (a + 2) % 3] = corners[:, 2]
+    return xyz
+
+
+def _cluster(line_of, pos, snap, lines, tree):
+    """Merge roots of one line closer than the cluster tolerance.
+
+    A cluster containing a zero lattice point, or within SNAP_LATTICE of
+    one, becomes that lattice point.
+    """
+    order = np.lexsort((pos, line_of))
+    line_of, pos, snap = line_of[order], pos[order], snap[order]
+    if len(pos) == 0:
+        return line_of, pos, snap
+    length = np.float64(1 << tree.fine_level)
+    close = (np.diff(line_of) == 0) & (np.diff(pos) <= max(tol.ROOT_CLUSTER * length, tol.SNAP_LATTICE))
+    group = np.concatenate([[0], np.cumsum(~close)])
+    n = group[-1] + 1
+    g_line = np.zeros(n, np.int64)
+    g_line[group] = line_of
+    g_snap = np.zeros(n, bool)
+    np.logical_or.at(g_snap, group, snap)
+    total = np.zeros(n)
+    np.add.at(total, group, pos)
+    g_pos = total / np.bincount(group, minlength=n)
+    snapped_pos = np.zeros(n)
+    np.maximum.at(snapped_pos, group, np.where(snap, pos, -np.inf))
+    g_pos = np.where(g_snap, snapped_pos, g_pos)
+    return g_line, g_pos, g_snap
+
+
+def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events:
+    """Turn root clusters into events using the signs of F between them."""
+    n = len(pos)
+    a = lines[line_of, 0]
+    # Sign samples: half-way to the neighbouring root on the same line, or
+    # half a cell beyond the outermost root.
+    same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])
+    same_next = np.concatenate([line_of[:-1] == line_of[1:], [False]])
+    prev = np.where(same_prev, np.roll(pos, 1), pos - 1.0)
+    nxt = np.where(same_next, np.roll(pos, -1), pos + 1.0)
+    left = _signs(surface, tree, lines[line_of], (pos + prev) / 2)
+    right = _signs(surface, tree, lines[line_of], (pos + nxt) / 2)
+
+    # Events: r- where F < 0 on the left, r+ where F < 0 on the right; a
+    # plain (unsnapped) sign change is one event at the root itself.
+    simple = ~snap & (left * right < 0)
+    minus = ~simple & (left < 0)
+    plus = ~simple & (right < 0)
+    idx = np.concatenate([np.nonzero(simple)[0], np.nonzero(minus)[0], np.nonzero(plus)[0]])
+    side = np.concatenate([np.zeros(simple.sum()), -np.ones(minus.sum()), np.ones(plus.sum())]).astype(np.int8)
+    direction = np.concatenate([
+        np.where(right[simple] > 0, 1, -1), np.ones(minus.sum()), -np.ones(plus.sum()),
+    ]).astype(np.int8)
+
+    ev_line = line_of[idx]
+    ev_pos = pos[idx]
+    ev_snap = snap[idx]
+    order_pos = ev_pos + np.where(ev_snap, side * 1e-3, 0.0)
+    order = np.lexsort((side, order_pos, ev_line))
+    ev_line, ev_pos, ev_snap, side, direction, idx = (
+        ev_line[order], ev_pos[order], ev_snap[order], side[order], direction[order], idx[order])
+    # Exact integer membership: a float key mixing line and position would
+    # round a root 1e-8 below a lattice point onto it (and into the next
+    # segment).  A snapped event sits a fraction of a cell to its side.
+    cell_key = ev_line * _LINE_STRIDE + np.floor(order_pos[order]).astype(np.int64)
+
+    ln = lines[ev_line]
+    xyz = np.zeros((len(ev_line), 3))
+    r = np.arange(len(ev_line))
+    xyz[r, ln[:, 0]] = ev_pos
+    xyz[r, (ln[:, 0] + 1) % 3] = ln[:, 1]
+    xyz[r, (ln[:, 0] + 2) % 3] = ln[:, 2]
+    point = tree.lattice_to_space(xyz)
+    m = (1 << tree.fine_level) + 1
+    lattice_key = (np.rint(xyz[:, 0]).astype(np.int64) * m + np.rint(xyz[:, 1]).astype(np.int64)) * m \
+        + np.rint(xyz[:, 2]).astype(np.int64)
+    key = np.where(ev_snap, lattice_key, m ** 3 + idx)
+    return Events(line=ev_line, pos=ev_pos, side=side, snapped=ev_snap, direction=direction,
+                  key=key, point=point, cell_key=cell_key, lines=lines, line_keys=uniq)
+
+
+def _signs(surface, tree, lines_rows, pos):
+    """Sign of F + eps (zero counts as +) at positions on lines."""
+    xyz = np.zeros((len(pos), 3))
+    r = np.arange(len(pos))
+    xyz[r, lines_rows[:, 0]] = pos
+    xyz[r, (lines_rows[:, 0] + 1) % 3] = lines_rows[:, 1]
+    xyz[r, (lines_rows[:, 0] + 2) % 3] = lines_rows[:, 2]
+    return np.where(surface(tree.lattice_to_space(xyz)) < 0, -1, 1)

@@ -1,0 +1,214 @@
+"""Face links: the curve F + eps = 0 on the faces between leaves.
+
+A *contact square* is a face of a leaf across which the neighbouring cell
+of the same size is not split further (it is a leaf as large or larger,
+empty, or outside the domain).  Contact squares tile every face of every
+leaf, so a face shared by one large box and four small ones is four
+squares, each seen by both sides: the links agree on both sides by
+construction.
+
+On each square the events of its four edges are paired into links, each
+oriented so that F + eps > 0 lies on its left seen from the square's +n
+side.  Pairing: where a tangential derivative is of one sign the face
+curve is a graph over the other axis, and sorting the events along that
+axis pairs consecutive ones; otherwise (only in boxes that failed the
+simplicity test) the events are paired along the boundary, each start with
+the next end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bernstein import sign_definite
+from .edges import Events
+from .octree import Octree, node_keys
+
+
+@dataclass
+class FaceLinks:
+    """Oriented links on contact squares and the leaves on both sides.
+
+    Attributes
+    ----------
+    square : (Q, 5) int64      (n, plane, u0, v0, size) of each square
+    minus, plus : (Q,) int64   leaf on the -n / +n side, or -1
+    link_square : (K,) int64   square of each link
+    start, end : (K,) int64    events joined, start -> end seen from +n
+    ambiguous : (Q,) bool      squares paired along the boundary (no graph axis)
+    inconsistent : (Q,) bool   squares whose events could not be paired
+    """
+
+    square: np.ndarray
+    minus: np.ndarray
+    plus: np.ndarray
+    link_square: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    ambiguous: np.ndarray
+    inconsistent: np.ndarray
+
+
+def contact_squares(tree: Octree):
+    """Contact squares and, for each, a leaf and face index providing it.
+
+    Returns
+    -------
+    squares : (Q, 5) int64   (n, plane, u0, v0, size)
+    owner : (Q,) int64       a leaf having the square as a whole face
+    owner_side : (Q,) int64  0 if it is the owner's -n face, 1 if its +n face
+    """
+    size = tree.size
+    top = 1 << tree.fine_level
+    rows, owners, sides = [], [], []
+    leaves = np.arange(len(size))
+    for n in range(3):
+        u, v = (n + 1) % 3, (n + 2) % 3
+        for side in (0, 1):
+            other = tree.corner.copy()
+            other[:, n] += size if side else -size
+            inside = (other[:, n] >= 0) & (other[:, n] < top)
+            keys = node_keys(tree.level, np.clip(other, 0, top - 1) >> (tree.fine_level - tree.level)[:, None])
+            pos = np.minimum(np.searchsorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
+            split = inside & (len(tree.internal) > 0) & (tree.internal[pos] == keys) if len(tree.internal) else np.zeros(len(size), bool)
+            keep = ~split
+            rows.append(np.stack([
+                np.full(keep.sum(), n), tree.corner[keep, n] + side * size[keep],
+                tree.corner[keep, u], tree.corner[keep, v], size[keep]], axis=1))
+            owners.append(leaves[keep])
+            sides.append(np.full(keep.sum(), side))
+    rows = np.concatenate(rows)
+    owners = np.concatenate(owners)
+    sides = np.concatenate(sides)
+    _, first = np.unique(rows, axis=0, return_index=True)
+    first = np.sort(first)
+    return rows[first], owners[first], sides[first]
+
+
+def _face_coefficients(tree: Octree, owner, owner_side, n):
+    """Bernstein coefficients of F on squares, axes ordered (u, v)."""
+    t = tree.tensors[owner]
+    face = np.where((owner_side == 1)[:, None, None],
+                    np.take(t, -1, axis=1 + n), np.take(t, 0, axis=1 + n))
+    if n == 1:  # the remaining axes are (x, z) = (v, u)
+        face = np.swapaxes(face, 1, 2)
+    return face
+
+
+def graph_modes(tree: Octree, squares, owner, owner_side) -> np.ndarray:
+    """0: the face curve is a graph over u; 1: over v; 2: neither is known."""
+    mode = np.full(len(squares), 2, np.int64)
+    for a in range(3):
+        sel = np.nonzero(squares[:, 0] == a)[0]
+        if len(sel) == 0:
+            continue
+        face = _face_coefficients(tree, owner[sel], owner_side[sel], a)
+        over_u = sign_definite(np.diff(face, axis=2), (1, 2))  # F_v of one sign
+        over_v = sign_definite(np.diff(face, axis=1), (1, 2))  # F_u of one sign
+        mode[sel] = np.where(over_u, 0, np.where(over_v, 1, 2))
+    return mode
+
+
+def square_events(events: Events, squares):
+    """Events on the boundary of each square, with their place on it.
+
+    Returns a dict of per-incidence arrays: ``sq``, ``ev``, ``is_start``
+    (F + eps goes from + to - along the counter-clockwise boundary there),
+    ``u``, ``v`` (lattice coordinates), ``tie_u``, ``tie_v`` (the side of
+    a snapped event, along u resp. v), ``ccw`` (place along the boundary).
+    """
+    n, plane, u0, v0, size = squares.T
+    u_ax, v_ax = (n + 1) % 3, (n + 2) % 3
+    # The four edges counter-clockwise seen from +n: bottom (+u), right (+v),
+    # top (-u), left (-v).
+    e_axis = np.stack([u_ax, v_ax, u_ax, v_ax], 1)
+    e_f1 = np.stack([v0, plane, v0 + size, plane], 1)
+    e_f2 = np.stack([plane, u0 + size, plane, u0], 1)
+    e_start = np.stack([u0, v0, u0, v0], 1)
+    sigma = np.array([1, 1, -1, -1])
+    seg, ev = events.on_segments(e_axis.ravel(), e_f1.ravel(), e_f2.ravel(),
+                                 e_start.ravel(), (e_start + size[:, None]).ravel())
+    sq, edge = seg // 4, seg % 4
+    pos = events.pos[ev]
+    side = events.side[ev].astype(float)
+    along_u = edge % 2 == 0
+    return dict(
+        sq=sq, ev=ev,
+        is_start=events.direction[ev] * sigma[edge] < 0,
+        u=np.where(along_u, pos, np.where(edge == 1, u0[sq] + size[sq], u0[sq])),
+        v=np.where(~along_u, pos, np.where(edge == 0, v0[sq], v0[sq] + size[sq])),
+        tie_u=np.where(along_u, side, 0.0),
+        tie_v=np.where(~along_u, side, 0.0),
+        ccw=edge * 4.0 * (1 << 20) + sigma[edge] * pos,
+        tie_ccw=sigma[edge] * side,
+    )
+
+
+def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
+    """Pair the events of each square according to its mode.
+
+    Returns
+    -------
+    link_square, start, end : (K,) int64
+    bad : (Q,) bool   squares with an odd count or a pair not (start, end)
+    """
+    sq, m = inc["sq"], mode[inc["sq"]]
+    key1 = np.select([m == 0, m == 1], [inc["u"], inc["v"]], inc["ccw"])
+    key2 = np.select([m == 0, m == 1], [inc["tie_u"], inc["tie_v"]], inc["tie_ccw"])
+    order = np.lexsort((key2, key1, sq))
+    sq, ev, is_start = sq[order], inc["ev"][order], inc["is_start"][order]
+    counts = np.bincount(sq, minlength=n_squares)
+    offset = np.cumsum(counts) - counts
+    bad = counts % 2 == 1
+    # Graph modes pair (0,1), (2,3), ...; boundary mode pairs each start
+    # with the next end, cyclically, so it starts at the first start.
+    first_start = np.zeros(n_squares, bool)
+    has = counts > 0
+    first_start[has] = is_start[offset[has]]
+    shift = np.where((mode == 2) & ~first_start & has, 1, 0)
+    rank = np.arange(len(sq)) - offset[sq]
+    slot = (rank - shift[sq]) % np.maximum(counts[sq], 1)
+    ok = ~bad[sq]
+    sq, ev, is_start, slot = sq[ok], ev[ok], is_start[ok], slot[ok]
+    order = np.lexsort((slot, sq))
+    a, b = order[0::2], order[1::2]
+    pair_bad = is_start[a] == is_start[b]
+    bad[sq[a][pair_bad]] = True
+    keep = ~bad[sq[a]]
+    a, b = a[keep], b[keep]
+    start = np.where(is_start[a], ev[a], ev[b])
+    end = np.where(is_start[a], ev[b], ev[a])
+    return sq[a], start, end, bad
+
+
+def face_links(tree: Octree, events: Events) -> FaceLinks:
+    """Pair the events on every contact square into oriented links."""
+    squares, owner, owner_side = contact_squares(tree)
+    mode = graph_modes(tree, squares, owner, owner_side)
+    inc = square_events(events, squares)
+    link_sq, start, end, bad = pair_events(inc, mode, len(squares))
+    # A graph pairing that does not alternate start/end means rounding
+    # defeated the sign test: pair those squares along the boundary instead.
+    retry = bad & (mode != 2)
+    if retry.any():
+        mode = np.where(retry, 2, mode)
+        link_sq, start, end, bad = pair_events(inc, mode, len(squares))
+    minus, plus = _sides(tree, squares)
+    return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
+                     start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
+
+
+def _sides(tree: Octree, squares):
+    """Leaves on the -n and +n sides of each square (-1 where none)."""
+    n, plane, u0, v0, size = squares.T
+    centre = np.zeros((len(squares), 3), np.int64)
+    r = np.arange(len(squares))
+    centre[r, (n + 1) % 3] = 2 * u0 + size
+    centre[r, (n + 2) % 3] = 2 * v0 + size
+    below = centre.copy()
+    above = centre.copy()
+    below[r, n] = 2 * plane - 1
+    above[r, n] = 2 * plane + 1
+    return tree.find_leaves(below), tree.find_leaves(above)

@@ -1,0 +1,113 @@
+"""Cycles of the link graph of each box.
+
+Each leaf sees the links of the contact squares on its boundary: as given
+on the squares it has on its +n faces, reversed on its -n faces (the
+outward normal is then -n).  In a box every event has then one link in
+and one out, so the links of a box form disjoint oriented cycles: the
+boundaries of the pieces of surface in the box.  For a simple box each
+cycle bounds one disc, a facet.
+
+The graph is held as a networkx ``DiGraph`` per box only on request
+(:func:`box_graph`); the cycles of all boxes are found at once on arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import networkx as nx
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+
+@dataclass
+class Cycles:
+    """Oriented cycles of events, one row block per cycle.
+
+    Attributes
+    ----------
+    box : (C,) int64          leaf of each cycle
+    offsets : (C+1,) int64    cycle c is ``events[offsets[c]:offsets[c+1]]``
+    events : (S,) int64       event indices in cycle order
+    broken_boxes : (B,) int64 leaves whose links did not form cycles
+    """
+
+    box: np.ndarray
+    offsets: np.ndarray
+    events: np.ndarray
+    broken_boxes: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.box)
+
+
+def box_links(links, extra=None):
+    """Links as seen by each leaf: (box, from_event, to_event).
+
+    ``extra`` may add links inside boxes (e.g. skeleton links) as a tuple of
+    arrays (box, from, to).
+    """
+    has_minus = links.minus[links.link_square] >= 0
+    has_plus = links.plus[links.link_square] >= 0
+    box = np.concatenate([links.minus[links.link_square][has_minus], links.plus[links.link_square][has_plus]])
+    src = np.concatenate([links.start[has_minus], links.end[has_plus]])
+    dst = np.concatenate([links.end[has_minus], links.start[has_plus]])
+    if extra is not None:
+        box = np.concatenate([box, extra[0]])
+        src = np.concatenate([src, extra[1]])
+        dst = np.concatenate([dst, extra[2]])
+    return box, src, dst
+
+
+def box_graph(box_links_arrays, box: int) -> nx.DiGraph:
+    """The link graph of one leaf as a networkx DiGraph (for inspection)."""
+    b, src, dst = box_links_arrays
+    sel = b == box
+    g = nx.DiGraph()
+    g.add_edges_from(zip(src[sel].tolist(), dst[sel].tolist()))
+    return g
+
+
+def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, n_events: int) -> Cycles:
+    """Orbits of the successor map of every leaf's links."""
+    node_src = box * n_events + src
+    node_dst = box * n_events + dst
+    nodes, inv = np.unique(np.concatenate([node_src, node_dst]), return_inverse=True)
+    a, b = inv[: len(src)], inv[len(src):]
+    n = len(nodes)
+    out_deg = np.bincount(a, minlength=n)
+    in_deg = np.bincount(b, minlength=n)
+    node_box = nodes // n_events
+    bad_node = (out_deg != 1) | (in_deg != 1)
+    broken = np.unique(node_box[bad_node])
+    good = ~np.isin(box, broken)
+    a, b = a[good], b[good]
+    if len(a) == 0:
+        return Cycles(np.zeros(0, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64), broken)
+    nxt = np.full(n, -1, np.int64)
+    nxt[a] = b
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    _, label = connected_components(graph, directed=True, connection="weak")
+    used = np.zeros(n, bool)
+    used[a] = True
+    # Walk every cycle from its smallest node, all cycles in step.
+    roots = np.full(label.max() + 1, n, np.int64)
+    np.minimum.at(roots, label[used], np.nonzero(used)[0])
+    roots = roots[roots < n]
+    position = np.full(n, -1, np.int64)
+    cur = roots.copy()
+    step = 0
+    while len(cur):
+        position[cur] = step
+        cur = nxt[cur]
+        cur = cur[position[cur] < 0]
+        step += 1
+    cyc = label[used]
+    idx = np.nonzero(used)[0]
+    order = np.lexsort((position[idx], cyc))
+    idx, cyc = idx[order], cyc[order]
+    uniq_cyc, start = np.unique(cyc, return_index=True)
+    offsets = np.append(start, len(idx))
+    return Cycles(box=node_box[idx[start]], offsets=offsets, events=nodes[idx] % n_events,
+                  broken_boxes=broken)

@@ -1,0 +1,143 @@
+"""The result of meshing: :class:`Mesh`, its report and its export."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import topology
+from .surface import Surface
+
+#: Formats written through meshio, by suffix.
+FORMATS = {
+    ".obj": "obj", ".ply": "ply", ".stl": "stl", ".vtk": "vtk", ".vtu": "vtu",
+    ".off": "off", ".msh": "gmsh", ".xdmf": "xdmf", ".mesh": "medit",
+}
+
+
+@dataclass
+class Mesh:
+    """A triangle mesh of a surface F = 0 inside a box.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+        Triangles, counter-clockwise around ``grad F``.
+    normals : (n, 3) float64
+        Unit ``grad F`` at the vertices (zero where grad F vanishes).
+    singular_points : (k, 3) float64
+    singularities : list
+        One record per singular point (location, Hessian rank and
+        signature, branches, classification).
+    surface : Surface
+    box : (3, 2) float64
+    stats : dict
+        How the mesher got there (boxes, levels, timings).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    surface: Surface
+    box: np.ndarray
+    normals: np.ndarray = None
+    singularities: list = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.normals is None:
+            g = self.surface.gradient(self.vertices) if len(self.vertices) else np.zeros((0, 3))
+            norm = np.linalg.norm(g, axis=1, keepdims=True)
+            self.normals = np.where(norm > 0, g / np.where(norm > 0, norm, 1), 0.0)
+
+    @property
+    def singular_points(self) -> np.ndarray:
+        if not self.singularities:
+            return np.zeros((0, 3))
+        return np.array([s.point for s in self.singularities], dtype=float)
+
+    # ------------------------------------------------------------ report
+    def report(self) -> dict[str, Any]:
+        """Facts computed from the mesh itself (not from the mesher's state)."""
+        v, f = self.vertices, self.faces
+        edges, counts = topology.edges_with_counts(f) if len(f) else (np.zeros((0, 2), int), np.zeros(0, int))
+        boundary = edges[counts == 1]
+        on_box = topology.on_box_boundary(v, self.box)
+        boundary_on_box = on_box[boundary].all(axis=1) if len(boundary) else np.zeros(0, bool)
+        size = float(np.max(self.box[:, 1] - self.box[:, 0]))
+        if len(v):
+            residual = np.abs(self.surface(v))
+            grad = np.linalg.norm(self.surface.gradient(v), axis=1)
+            dist = residual / np.maximum(grad, 1e-300)
+            # Singular vertices have grad F = 0: there |F| itself is the test.
+            dist = np.where(grad > 1e-8 * max(size, 1.0), dist, residual)
+        else:
+            dist = np.zeros(0)
+        angles = topology.triangle_angles(v, f) if len(f) else np.zeros((0, 3))
+        return {
+            "vertices": len(v),
+            "faces": len(f),
+            "edges": len(edges),
+            "boundary_edges": int(len(boundary)),
+            "boundary_edges_off_box": int((~boundary_on_box).sum()),
+            "non_manifold_edges": int((counts > 2).sum()),
+            "euler_characteristic": int(len(v) - len(edges) + len(f)),
+            "components": topology.component_count(len(v), f),
+            "max_distance": float(dist.max() / size) if len(dist) else 0.0,
+            "min_angle": float(angles.min()) if len(angles) else float("nan"),
+            "singular_points": len(self.singularities),
+        }
+
+    def report_text(self) -> str:
+        """The report as aligned lines, singular points after it."""
+        r = self.report()
+        lines = [
+            f"surface              {self.surface.expr}",
+            "box                  " + " x ".join(f"[{a:g}, {b:g}]" for a, b in self.box),
+            f"vertices             {r['vertices']}",
+            f"faces                {r['faces']}",
+            f"boundary edges       {r['boundary_edges']} ({r['boundary_edges_off_box']} off the box faces)",
+            f"non-manifold edges   {r['non_manifold_edges']}",
+            f"Euler characteristic {r['euler_characteristic']}",
+            f"components           {r['components']}",
+            f"max |F|/|grad F|     {r['max_distance']:.2e} of the box size",
+            f"min angle            {r['min_angle']:.2f} degrees",
+        ]
+        if "time" in self.stats:
+            lines.append(f"time                 {self.stats['time']:.3f} s")
+        lines.append(f"singular points      {r['singular_points']}")
+        for s in self.singularities:
+            lines.append("  " + (s.describe() if hasattr(s, "describe") else str(s)))
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------ export
+    def to_meshio(self):
+        """The mesh as a ``meshio.Mesh`` (vertex normals as point data)."""
+        import meshio
+
+        return meshio.Mesh(self.vertices, [("triangle", self.faces)],
+                           point_data={"Normals": self.normals})
+
+    def write(self, path, file_format: str | None = None) -> Path:
+        """Write through meshio; the format comes from the suffix.
+
+        Raises
+        ------
+        ValueError
+            For a suffix meshio is not asked to write here.
+        """
+        path = Path(path)
+        fmt = file_format or FORMATS.get(path.suffix.lower())
+        if fmt is None:
+            raise ValueError(
+                f"unknown mesh format {path.suffix!r}: use one of {', '.join(sorted(FORMATS))}")
+        m = self.to_meshio()
+        if fmt in ("obj", "stl", "off"):
+            # These writers take no per-vertex normals array.
+            m.point_data = {}
+        kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
+        m.write(path, file_format=fmt, **kwargs)
+        return path
