@@ -110,6 +110,9 @@ def sign_definite(coeffs: np.ndarray, axes) -> np.ndarray:
     The convex-hull property then makes the function monotone (weakly, and
     strictly off a set of measure zero) on the box or face.
     """
+    if any(coeffs.shape[a] == 0 for a in axes):
+        # F has degree 0 in that variable: the derivative is identically 0.
+        return np.zeros(coeffs.shape[: min(axes)], dtype=bool)
     lo = coeffs.min(axis=axes)
     hi = coeffs.max(axis=axes)
     return ((lo >= 0) & (hi > 0)) | ((hi <= 0) & (lo < 0))

@@ -134,10 +134,16 @@ class Mesh:
         if fmt is None:
             raise ValueError(
                 f"unknown mesh format {path.suffix!r}: use one of {', '.join(sorted(FORMATS))}")
-        m = self.to_meshio()
+        import meshio
+
+        faces = self.faces.astype(np.int32) if fmt == "ply" else self.faces
         if fmt in ("obj", "stl", "off"):
-            # These writers take no per-vertex normals array.
-            m.point_data = {}
+            point_data = {}  # these writers take no per-vertex arrays
+        elif fmt == "ply":  # PLY stores normals as three scalar properties
+            point_data = {k: np.ascontiguousarray(self.normals[:, i]) for i, k in enumerate(("nx", "ny", "nz"))}
+        else:
+            point_data = {"Normals": self.normals}
+        m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
         kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
         m.write(path, file_format=fmt, **kwargs)
         return path

@@ -1,0 +1,127 @@
+"""Mesh checks written independently of singmesh's own report.
+
+Plain Python and numpy over the triangle list: edge incidences, Euler
+characteristic, components (union-find), duplicates, degenerate triangles,
+and the fans of triangles around a vertex.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+
+import numpy as np
+
+
+def edge_counts(faces) -> Counter:
+    c = Counter()
+    for a, b, d in np.asarray(faces).tolist():
+        for u, v in ((a, b), (b, d), (d, a)):
+            c[(min(u, v), max(u, v))] += 1
+    return c
+
+
+def euler(vertices, faces) -> int:
+    used = np.unique(np.asarray(faces))
+    return len(used) - len(edge_counts(faces)) + len(faces)
+
+
+def components(faces) -> int:
+    parent = {}
+
+    def find(a):
+        while parent.setdefault(a, a) != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b, d in np.asarray(faces).tolist():
+        ra, rb, rd = find(a), find(b), find(d)
+        parent[rb] = ra
+        parent[find(rd)] = ra
+    return len({find(v) for v in np.unique(np.asarray(faces)).tolist()})
+
+
+def boundary_edges(faces):
+    return [e for e, n in edge_counts(faces).items() if n == 1]
+
+
+def non_manifold_edges(faces):
+    return [e for e, n in edge_counts(faces).items() if n > 2]
+
+
+def on_box(points, box, rel=1e-9) -> np.ndarray:
+    box = np.asarray(box, float)
+    tol = rel * (box[:, 1] - box[:, 0])
+    p = np.asarray(points)
+    return ((np.abs(p - box[:, 0]) <= tol) | (np.abs(p - box[:, 1]) <= tol)).any(axis=-1)
+
+
+def boundary_edges_off_box(vertices, faces, box):
+    v = np.asarray(vertices)
+    return [e for e in boundary_edges(faces)
+            if not any(on_box(v[list(e)], box)[:, None].all(axis=0))
+            and not _same_box_face(v[e[0]], v[e[1]], box)]
+
+
+def _same_box_face(p, q, box, rel=1e-9):
+    box = np.asarray(box, float)
+    tol = rel * (box[:, 1] - box[:, 0])
+    for a in range(3):
+        for s in range(2):
+            if abs(p[a] - box[a, s]) <= tol[a] and abs(q[a] - box[a, s]) <= tol[a]:
+                return True
+    return False
+
+
+def duplicate_vertices(vertices, rel=1e-12) -> int:
+    v = np.asarray(vertices)
+    scale = max(np.ptp(v, axis=0).max(), 1e-300) if len(v) else 1.0
+    q = np.round(v / (rel * scale)).astype(np.int64)
+    return len(q) - len(np.unique(q, axis=0))
+
+
+def degenerate_triangles(vertices, faces, rel=1e-14) -> int:
+    p = np.asarray(vertices)[np.asarray(faces)]
+    area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    scale = np.ptp(np.asarray(vertices), axis=0).max() ** 2
+    repeated = (np.asarray(faces)[:, 0] == np.asarray(faces)[:, 1]) | \
+        (np.asarray(faces)[:, 1] == np.asarray(faces)[:, 2]) | (np.asarray(faces)[:, 0] == np.asarray(faces)[:, 2])
+    return int(((area2 <= rel * scale) | repeated).sum())
+
+
+def fans_at(faces, vertex: int) -> int:
+    """Number of edge-connected fans of triangles around ``vertex``.
+
+    Two triangles at the vertex are in one fan when they share an edge
+    through the vertex.  At a manifold vertex this is 1; at a node (two
+    cones) 2.
+    """
+    tris = [t for t in np.asarray(faces).tolist() if vertex in t]
+    by_edge = defaultdict(list)
+    for i, t in enumerate(tris):
+        for w in t:
+            if w != vertex:
+                by_edge[w].append(i)
+    parent = list(range(len(tris)))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for ids in by_edge.values():
+        for j in ids[1:]:
+            parent[find(j)] = find(ids[0])
+    return len({find(i) for i in range(len(tris))})
+
+
+def fans_are_closed(faces, vertex: int) -> bool:
+    """Every edge through ``vertex`` is used by exactly two of its triangles."""
+    c = Counter()
+    for t in np.asarray(faces).tolist():
+        if vertex in t:
+            for w in t:
+                if w != vertex:
+                    c[w] += 1
+    return all(n == 2 for n in c.values())

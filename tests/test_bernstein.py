@@ -1,0 +1,79 @@
+"""Bernstein conversion and splitting against direct evaluation."""
+
+import numpy as np
+import pytest
+from scipy.special import comb
+
+from singmesh.boxes.bernstein import bernstein_on_box, evaluate_1d, split, split_matrices
+
+
+def eval_bernstein(tensor, t):
+    """Direct evaluation of a tensor-product Bernstein form at local t in [0,1]^3."""
+    basis = []
+    for a in range(3):
+        n = tensor.shape[a] - 1
+        i = np.arange(n + 1)
+        basis.append(comb(n, i) * t[a] ** i * (1 - t[a]) ** (n - i))
+    return np.einsum("i,j,k,ijk->", *basis, tensor)
+
+
+def eval_monomial(coeffs, p):
+    total = 0.0
+    for (i, j, k), c in np.ndenumerate(coeffs):
+        total += c * p[0] ** i * p[1] ** j * p[2] ** k
+    return total
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_conversion_matches_direct_evaluation(seed):
+    rng = np.random.default_rng(seed)
+    coeffs = rng.normal(size=(4, 3, 5))
+    box = np.sort(rng.uniform(-3, 3, size=(3, 2)), axis=1)
+    tensor = bernstein_on_box(coeffs, box)
+    for _ in range(25):
+        t = rng.random(3)
+        p = box[:, 0] + t * (box[:, 1] - box[:, 0])
+        assert eval_bernstein(tensor, t) == pytest.approx(eval_monomial(coeffs, p), abs=1e-11)
+
+
+def test_corner_coefficients_are_values():
+    rng = np.random.default_rng(5)
+    coeffs = rng.normal(size=(3, 3, 3))
+    box = np.array([[-1.0, 2.0], [0.5, 1.5], [-2.0, -1.0]])
+    tensor = bernstein_on_box(coeffs, box)
+    for idx in np.ndindex(2, 2, 2):
+        p = box[np.arange(3), idx]
+        corner = tuple(-1 if i else 0 for i in idx)
+        assert tensor[corner] == pytest.approx(eval_monomial(coeffs, p), abs=1e-12)
+
+
+def test_split_children_agree_with_parent():
+    rng = np.random.default_rng(3)
+    parent = rng.normal(size=(2, 4, 5, 3))
+    children = split(parent)
+    assert children.shape == (2, 2, 2, 2, 4, 5, 3)
+    for m in range(2):
+        for c in np.ndindex(2, 2, 2):
+            for _ in range(10):
+                t = rng.random(3)
+                tp = (t + np.array(c)) / 2
+                assert eval_bernstein(children[(m,) + c], t) == pytest.approx(
+                    eval_bernstein(parent[m], tp), abs=1e-12)
+
+
+def test_split_matrices_are_exact_dyadic():
+    # Splitting at 1/2 involves only dyadic rationals: entries times 2^n are integers.
+    left, right = split_matrices(7)
+    assert np.array_equal(left * 2**7, np.round(left * 2**7))
+    assert np.array_equal(right * 2**7, np.round(right * 2**7))
+    assert np.allclose(left.sum(axis=1), 1) and np.allclose(right.sum(axis=1), 1)
+
+
+def test_evaluate_1d():
+    rng = np.random.default_rng(4)
+    b = rng.normal(size=(6, 5))
+    t = rng.random(6)
+    n = 4
+    i = np.arange(n + 1)
+    direct = (b * comb(n, i) * t[:, None] ** i * (1 - t[:, None]) ** (n - i)).sum(axis=1)
+    assert np.allclose(evaluate_1d(b, t), direct, atol=1e-13)

@@ -1,0 +1,167 @@
+"""Whole-mesh tests on smooth surfaces, checked independently of the mesher.
+
+F is written here again as a numpy function (not taken from singmesh), and
+the topology is counted by tests/meshcheck.py.
+"""
+
+import numpy as np
+import pytest
+
+import singmesh
+
+import meshcheck as mc
+
+
+def grad(f, p, h=1e-6):
+    e = np.eye(3) * h
+    return np.stack([(f(p + e[i]) - f(p - e[i])) / (2 * h) for i in range(3)], axis=-1)
+
+
+def F(expr):
+    return lambda p: eval(expr, {"x": p[..., 0], "y": p[..., 1], "z": p[..., 2], "np": np})
+
+
+B2 = ((-2, 2),) * 3
+CASES = [
+    # name, equation, box, numpy F, Euler characteristic, components
+    ("sphere", "x^2+y^2+z^2-1", B2, "x**2+y**2+z**2-1", 2, 1),
+    ("torus", "(x^2+y^2+z^2+0.64-0.09)^2-2.56(x^2+y^2)", B2,
+     "(x**2+y**2+z**2+0.64-0.09)**2-2.56*(x**2+y**2)", 0, 1),
+    ("tanglecube", "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3, 3),) * 3,
+     "x**4-5*x**2+y**4-5*y**2+z**4-5*z**2+11.8", -8, 1),
+    ("cube6", "x^6+y^6+z^6-1", B2, "x**6+y**6+z**6-1", 2, 1),
+    ("two spheres", "((x-1)^2+y^2+z^2-0.5)((x+1)^2+y^2+z^2-0.5)", B2,
+     "((x-1)**2+y**2+z**2-0.5)*((x+1)**2+y**2+z**2-0.5)", 4, 2),
+    ("plane", "x+y+z", ((-1, 1),) * 3, "x+y+z", 1, 1),
+]
+
+
+@pytest.fixture(scope="module", params=CASES, ids=[c[0] for c in CASES])
+def case(request):
+    name, eq, box, f, chi, comps = request.param
+    return singmesh.mesh(eq, box), np.array(box, float), F(f), chi, comps
+
+
+def test_topology(case):
+    m, box, f, chi, comps = case
+    assert len(m.faces) > 100
+    assert mc.euler(m.vertices, m.faces) == chi
+    assert mc.components(m.faces) == comps
+
+
+def test_no_defects(case):
+    m, box, f, chi, comps = case
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, box) == []
+    assert mc.duplicate_vertices(m.vertices) == 0
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+    # Every vertex is used by a triangle.
+    assert len(np.unique(m.faces)) == len(m.vertices)
+
+
+def test_vertices_on_surface(case):
+    m, box, f, chi, comps = case
+    v = m.vertices
+    d = np.abs(f(v)) / np.linalg.norm(grad(f, v), axis=1)
+    assert d.max() <= 1e-10 * np.ptp(box, axis=1).max()
+
+
+def test_orientation_follows_gradient(case):
+    m, box, f, chi, comps = case
+    p = m.vertices[m.faces]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    g = grad(f, p.mean(axis=1))
+    assert (np.einsum("ij,ij->i", n, g) > 0).mean() == 1.0
+
+
+def test_report_agrees_with_independent_counts(case):
+    m, box, f, chi, comps = case
+    r = m.report()
+    assert r["euler_characteristic"] == mc.euler(m.vertices, m.faces)
+    assert r["components"] == mc.components(m.faces)
+    assert r["non_manifold_edges"] == len(mc.non_manifold_edges(m.faces))
+    assert r["boundary_edges"] == len(mc.boundary_edges(m.faces))
+
+
+def test_box_cuts_the_surface():
+    # A sphere cut by the box: boundary only on the box faces, a disc per cap.
+    box = ((-0.6, 2), (-2, 2), (-2, 2))
+    m = singmesh.mesh("x^2+y^2+z^2-1", box)
+    assert mc.boundary_edges(m.faces), "the cut must leave a boundary"
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(box)) == []
+    assert mc.euler(m.vertices, m.faces) == 1
+    assert mc.non_manifold_edges(m.faces) == []
+
+
+@pytest.mark.parametrize("box", [((-1, 1),) * 3, ((-2, 2),) * 3, ((-1.5, 1.5),) * 3])
+def test_symmetric_boxes_zeros_on_split_planes(box):
+    # x^2+y^2+z^2 = 1 touches the split planes x, y, z = +-1 at lattice
+    # points; the mesh must still be a clean sphere.
+    m = singmesh.mesh("x^2+y^2+z^2-1", box, coarse=16)
+    assert mc.euler(m.vertices, m.faces) == 2
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.boundary_edges(m.faces) == []
+    assert mc.duplicate_vertices(m.vertices) == 0
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+
+
+def test_surface_containing_split_planes():
+    # xy(x+y+z-0.3)... keep it smooth: the plane z = 0 itself, exactly a split plane.
+    m = singmesh.mesh("z", ((-1, 1),) * 3, coarse=8)
+    assert mc.euler(m.vertices, m.faces) == 1
+    assert np.abs(m.vertices[:, 2]).max() == 0
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.duplicate_vertices(m.vertices) == 0
+    assert np.isclose(np.sum(0.5 * np.linalg.norm(np.cross(
+        m.vertices[m.faces[:, 1]] - m.vertices[m.faces[:, 0]],
+        m.vertices[m.faces[:, 2]] - m.vertices[m.faces[:, 0]]), axis=1)), 4.0)
+
+
+def test_deterministic():
+    a = singmesh.mesh("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3, 3),) * 3, coarse=16)
+    b = singmesh.mesh("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3, 3),) * 3, coarse=16)
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
+@pytest.mark.parametrize("coarse", [8, 16, 64])
+def test_resolutions(coarse):
+    m = singmesh.mesh("(x^2+y^2+z^2+0.64-0.09)^2-2.56(x^2+y^2)", coarse=coarse, fine=max(coarse, 128))
+    assert mc.euler(m.vertices, m.faces) == 0
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.boundary_edges(m.faces) == []
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(box=((1, 0), (0, 1), (0, 1))), "inverted"),
+    (dict(box=((0, 0), (0, 1), (0, 1))), "empty"),
+    (dict(box=((0, 1), (0, 1))), "three"),
+    (dict(box=((0, np.inf), (0, 1), (0, 1))), "non-finite"),
+    (dict(coarse=12), "power of two"),
+    (dict(coarse=64, fine=32), "at least"),
+])
+def test_bad_arguments(kwargs, words):
+    with pytest.raises(singmesh.SurfaceError, match=words):
+        singmesh.mesh("x^2+y^2+z^2-1", **kwargs)
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".stl", ".vtk", ".vtu", ".off"])
+def test_write_round_trip(tmp_path, suffix):
+    import meshio
+
+    m = singmesh.mesh("x^2+y^2+z^2-1", coarse=8)
+    path = m.write(tmp_path / f"sphere{suffix}")
+    back = meshio.read(path)
+    assert len(back.points) == len(m.vertices)
+    tri = [c.data for c in back.cells if c.type == "triangle"]
+    assert sum(len(t) for t in tri) == len(m.faces)
+    # Formats may reorder points (STL) and store float32: match point sets.
+    from scipy.spatial import cKDTree
+
+    assert cKDTree(m.vertices).query(back.points)[0].max() < 1e-6
+    assert cKDTree(back.points).query(m.vertices)[0].max() < 1e-6
+
+
+def test_write_unknown_format(tmp_path):
+    m = singmesh.mesh("x^2+y^2+z^2-1", coarse=8)
+    with pytest.raises(ValueError, match="unknown mesh format"):
+        m.write(tmp_path / "a.xyz")
