@@ -20,6 +20,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_smooth.py
+	$(PY) benchmarks/bench_singular.py
 
 gallery: $(STAMP)
 	$(PY) gallery/generate.py --out gallery/out

@@ -113,6 +113,32 @@ class Octree:
         return found
 
 
+def star(tree: Octree, point: np.ndarray, rel: float = 1e-9) -> np.ndarray:
+    """Leaves whose closed box contains ``point`` (1 to 8 of them, sorted).
+
+    A point on a face, edge or corner shared by several leaves gets all of
+    them, so that the point lies strictly inside their union.
+    """
+    lattice = (np.asarray(point, float) - tree.box[:, 0]) / tree.cell
+    offsets = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1], indexing="ij")).reshape(3, -1).T
+    probes = lattice[None, :] + rel * offsets
+    keys = tree.leaf_keys()
+    order = np.argsort(keys)
+    found = set()
+    top = 1 << tree.fine_level
+    for q in probes:
+        if (q < 0).any() or (q >= top).any():
+            continue
+        for lvl in np.unique(tree.level):
+            cell = np.floor(q / (1 << (tree.fine_level - int(lvl)))).astype(np.int64)
+            key = node_keys(np.array(lvl), cell)
+            pos = np.searchsorted(keys[order], key)
+            if pos < len(keys) and keys[order][pos] == key:
+                found.add(int(order[pos]))
+                break
+    return np.array(sorted(found), dtype=np.int64)
+
+
 def empty_boxes(tensors: np.ndarray) -> np.ndarray:
     """Boxes where F + eps has no zero: all coefficients >= 0, or all < 0."""
     flat = tensors.reshape(len(tensors), -1)

@@ -13,6 +13,8 @@ from typing import Callable
 
 import numpy as np
 
+from singmesh import tolerances as tol
+
 from .triangulate import triangulate_polygons
 
 
@@ -53,6 +55,13 @@ def clean_polygons(offsets: np.ndarray, ids: np.ndarray):
             np.asarray(out_src, np.int64))
 
 
+def _zero_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    p = vertices[faces]
+    cross = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    edge2 = np.max([np.sum((p[:, i] - p[:, (i + 1) % 3]) ** 2, axis=1) for i in range(3)], axis=0)
+    return cross <= tol.ZERO_AREA * edge2
+
+
 def _cut_pinched(seq: list) -> list[list]:
     """Cut a cyclic sequence at repeated entries into simple cycles."""
     out, stack, where = [], [], {}
@@ -72,37 +81,46 @@ def _cut_pinched(seq: list) -> list[list]:
 
 
 def assemble(
-    cycle_offsets: np.ndarray,
-    cycle_events: np.ndarray,
-    event_key: np.ndarray,
-    event_point: np.ndarray,
+    offsets: np.ndarray,
+    keys: np.ndarray,
+    points: np.ndarray,
     gradient: Callable[[np.ndarray], np.ndarray],
     project: Callable[[np.ndarray], np.ndarray] | None = None,
+    apex: np.ndarray | None = None,
 ):
-    """Vertices and triangles from the cycles of all boxes.
+    """Vertices and triangles from polygons given by vertex keys.
 
     Parameters
     ----------
-    cycle_offsets, cycle_events : cycles as event indices (see ``Cycles``)
-    event_key, event_point : identity and position of every event
+    offsets, keys : polygon i is ``keys[offsets[i]:offsets[i+1]]``
+    points : (S, 3) position of every entry of ``keys``
     gradient : callable giving grad F at points (orientation reference)
     project : callable projecting points onto the surface (centre vertices)
+    apex : (P,) bool, optional
+        Polygons whose first vertex is a singular point: large ones are
+        fanned from it rather than from a new centre vertex.
 
     Returns
     -------
-    vertices : (V, 3), faces : (T, 3) int64, face_cycle : (T,) int64
+    vertices : (V, 3), faces : (T, 3) int64, key_of_vertex : (V,) int64
     """
-    keys, ids = np.unique(event_key[cycle_events], return_inverse=True)
-    first = np.zeros(len(keys), np.int64)
-    first[ids[::-1]] = cycle_events[::-1]
-    vertices = event_point[first]
-    offsets, poly, src = clean_polygons(cycle_offsets, ids)
+    uniq, ids = np.unique(keys, return_inverse=True)
+    first = np.zeros(len(uniq), np.int64)
+    first[ids[::-1]] = np.arange(len(keys))[::-1]
+    vertices = points[first]
+    offsets, poly, src = clean_polygons(offsets, ids)
     normals = gradient(vertices)
-    faces, extra, face_poly = triangulate_polygons((offsets, poly), vertices, normals, project)
+    fan = None if apex is None else apex[src]
+    faces, extra, _ = triangulate_polygons((offsets, poly), vertices, normals, project, fan)
     vertices = np.concatenate([vertices, extra])
-    face_cycle = src[face_poly]
+    vkeys = np.concatenate([uniq, np.full(len(extra), -1, np.int64)])
+    # A facet whose vertices all collapsed onto a line (a sliver of F + eps
+    # of infinitesimal width, e.g. along a lattice line lying in the
+    # surface) has no area: its triangles go.  Elsewhere the template
+    # search never picks a zero-area triangle when another exists.
+    faces = faces[~_zero_area(vertices, faces)]
     # Drop vertices no triangle uses (collapsed infinitesimal features).
     used = np.zeros(len(vertices), bool)
     used[faces.ravel()] = True
     remap = np.cumsum(used) - 1
-    return vertices[used], remap[faces], face_cycle
+    return vertices[used], remap[faces], vkeys[used]

@@ -42,21 +42,29 @@ class Cycles:
         return len(self.box)
 
 
-def box_links(links, extra=None):
-    """Links as seen by each leaf: (box, from_event, to_event).
+def box_links(links, group: np.ndarray | None = None):
+    """Links as seen by each box: (box, from_event, to_event).
 
-    ``extra`` may add links inside boxes (e.g. skeleton links) as a tuple of
-    arrays (box, from, to).
+    Parameters
+    ----------
+    links : FaceLinks
+    group : (N,) int64, optional
+        Box id of every leaf.  Leaves sharing an id are one box (the star
+        of a singular point); links on squares inside such a box are
+        dropped, only its outer boundary counts.
     """
-    has_minus = links.minus[links.link_square] >= 0
-    has_plus = links.plus[links.link_square] >= 0
-    box = np.concatenate([links.minus[links.link_square][has_minus], links.plus[links.link_square][has_plus]])
+    minus = links.minus[links.link_square]
+    plus = links.plus[links.link_square]
+    if group is not None:
+        minus = np.where(minus >= 0, group[np.maximum(minus, 0)], -1)
+        plus = np.where(plus >= 0, group[np.maximum(plus, 0)], -1)
+        inner = minus == plus
+        minus = np.where(inner, -1, minus)
+        plus = np.where(inner, -1, plus)
+    has_minus, has_plus = minus >= 0, plus >= 0
+    box = np.concatenate([minus[has_minus], plus[has_plus]])
     src = np.concatenate([links.start[has_minus], links.end[has_plus]])
     dst = np.concatenate([links.end[has_minus], links.start[has_plus]])
-    if extra is not None:
-        box = np.concatenate([box, extra[0]])
-        src = np.concatenate([src, extra[1]])
-        dst = np.concatenate([dst, extra[2]])
     return box, src, dst
 
 

@@ -58,6 +58,7 @@ def triangulate_polygons(
     points: np.ndarray,
     normals: np.ndarray,
     project: Callable[[np.ndarray], np.ndarray] | None = None,
+    fan_from_first: np.ndarray | None = None,
 ):
     """Triangulate polygons given as vertex-index lists.
 
@@ -71,6 +72,9 @@ def triangulate_polygons(
         Surface normals at the points (orientation reference).
     project : callable, optional
         Maps points near the surface onto it; used for centre vertices.
+    fan_from_first : (P,) bool, optional
+        Large polygons to fan from their first vertex instead (a singular
+        point, where a centre vertex would not lie on a disc).
 
     Returns
     -------
@@ -90,6 +94,15 @@ def triangulate_polygons(
             faces.append(poly if n == 3 else _best_template(poly, points, normals))
             owner.append(np.repeat(sel, n - 2))
             continue
+        if fan_from_first is not None and fan_from_first[sel].any():
+            f = fan_from_first[sel]
+            apex = poly[f]
+            k = np.arange(1, n - 1)
+            faces.append(np.stack([np.repeat(apex[:, :1], n - 2, 1), apex[:, k], apex[:, k + 1]], -1).reshape(-1, 3))
+            owner.append(np.repeat(sel[f], n - 2))
+            sel, poly = sel[~f], poly[~f]
+            if len(sel) == 0:
+                continue
         # Large polygon: fan around a projected centre vertex.
         centre = points[poly].mean(axis=1)
         if project is not None:

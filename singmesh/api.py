@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
-from singmesh.boxes.octree import subdivide
+from singmesh.boxes.octree import star, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
+from singmesh.facets.fans import insert_link_nodes, sector_polygons
+from singmesh.skeleton.curves import skeleton_links
+from singmesh.skeleton.directions import skeleton_directions
+from singmesh.skeleton.singular import singular_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
@@ -87,10 +92,33 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
-    bl = box_links(links)
-    cycles = find_cycles(*bl, n_events=len(events.key))
-    vertices, faces, _ = assemble(cycles.offsets, cycles.events, events.key, events.point,
-                                  surf.gradient, project=lambda p: project_to_surface(surf, p))
+    t_sing = time.perf_counter()
+    points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    t_sing = time.perf_counter() - t_sing
+
+    # Each singular point's star (the leaves whose closure holds it) is one
+    # box: p lies strictly inside it, wherever the split planes fall.
+    group = np.arange(len(tree.level), dtype=np.int64)
+    stars, clashes = {}, 0
+    for i, sp in enumerate(points):
+        leaves = star(tree, sp.point)
+        if len(leaves) == 0:
+            continue  # no surface around it: an isolated real point
+        if (group[leaves] >= len(tree.level)).any():
+            clashes += 1  # stars overlap: leave this one to the plain facets
+            continue
+        group[leaves] = len(tree.level) + i
+        stars[len(tree.level) + i] = i
+    cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
+
+    offsets, keys, pts, apex, branches = _polygons(surf, events, cycles, stars, points)
+    vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
+                                      project=lambda q: project_to_surface(surf, q), apex=apex)
+    singular = []
+    for i, sp in enumerate(points):
+        where = np.nonzero(vkeys == _point_key(i))[0]
+        singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
+                                branches=branches.get(i, 0)))
     stats = {
         "leaves": len(tree.level),
         "non_simple_leaves": int((~tree.simple).sum()),
@@ -100,9 +128,56 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "broken_boxes": len(cycles.broken_boxes),
         "ambiguous_squares": int(links.ambiguous.sum()),
         "inconsistent_squares": int(links.inconsistent.sum()),
+        "singular_search_time": t_sing,
+        "singular_locus_not_isolated": bool(overflow),
+        "overlapping_stars": clashes,
         "time": time.perf_counter() - t0,
     }
-    return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, stats=stats)
+    return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats)
+
+
+def _point_key(i: int) -> int:
+    """Vertex key of singular point i: below all event keys (which are >= 0)."""
+    return -1 - i
+
+
+def _polygons(surf, events, cycles, stars, points):
+    """Facet polygons (offsets, keys, points, apex flags) and branch counts.
+
+    Plain boxes give one polygon per cycle; the star of a singular point
+    gives sectors fanning into it (:mod:`singmesh.facets.fans`).
+    """
+    sizes = np.diff(cycles.offsets)
+    plain = ~np.isin(cycles.box, list(stars))
+    ev = cycles.events
+    owner = np.repeat(np.arange(len(cycles)), sizes)
+    keep = plain[owner]
+    parts_keys = [events.key[ev[keep]]]
+    parts_pts = [events.point[ev[keep]]]
+    parts_sizes = [sizes[plain]]
+    apex = [np.zeros(plain.sum(), bool)]
+    branches = {}
+    splits = {}
+    next_key = int(events.key.max()) + 1 if len(events.key) else 0
+    for c in np.nonzero(~plain)[0]:
+        i = stars[cycles.box[c]]
+        p = points[i].point
+        cyc = ev[cycles.offsets[c]:cycles.offsets[c + 1]]
+        cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
+        links = skeleton_links(surf, p, cyc_pts, skeleton_directions(surf.hessian(p)))
+        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, links, next_key)
+        splits.update(split)
+        for k, q in polys:
+            parts_keys.append(k)
+            parts_pts.append(q)
+            parts_sizes.append([len(k)])
+            apex.append([True])
+        branches[i] = branches.get(i, 0) + 1
+    sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys),
+                                           np.concatenate(parts_pts), splits)
+    return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
 
 
 def project_to_surface(surface: Surface, points: np.ndarray, iterations: int = 8) -> np.ndarray:

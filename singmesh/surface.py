@@ -34,7 +34,46 @@ from .tolerances import MAX_DEGREE, ZERO_ULPS
 X, Y, Z = sympy.symbols("x y z", real=True)
 VARIABLES = (X, Y, Z)
 
-_TRANSFORMS = standard_transformations + (implicit_multiplication, convert_xor)
+
+
+def _split_names(tokens, local_dict, global_dict):
+    """Read an unknown name made of known ones as their product: ``xyz``, ``tx``.
+
+    SingSurf writes ``16xyz``; a name that is itself known (a parameter,
+    a function) is never split.
+    """
+    from tokenize import NAME, OP
+
+    known = [k for k in local_dict if isinstance(local_dict[k], sympy.Symbol)]
+    out = []
+    for i, tok in enumerate(tokens):
+        name = tok[1]
+        follows_call = i + 1 < len(tokens) and tokens[i + 1][1] == "("
+        if tok[0] == NAME and name not in local_dict and name not in global_dict and not follows_call:
+            parts = _segment(name, known)
+            if parts and len(parts) > 1:
+                for j, part in enumerate(parts):
+                    if j:
+                        out.append((OP, "*"))
+                    out.append((NAME, part))
+                continue
+        out.append(tok)
+    return out
+
+
+def _segment(name: str, known: list[str]):
+    """Split ``name`` into a sequence of ``known`` names, longest first."""
+    best = {0: []}
+    for i in range(1, len(name) + 1):
+        for k in sorted(known, key=len, reverse=True):
+            j = i - len(k)
+            if j >= 0 and j in best and name[j:i] == k:
+                best[i] = best[j] + [k]
+                break
+    return best.get(len(name))
+
+
+_TRANSFORMS = (_split_names,) + standard_transformations + (implicit_multiplication, convert_xor)
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*$")
 
 # Names the text may use besides x, y, z and the parameters: numbers and
@@ -99,10 +138,13 @@ def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     """
     p = np.asarray(points, dtype=float)
     nx, ny, nz = coeffs.shape
-    px = _powers(p[..., 0], nx)
-    py = _powers(p[..., 1], ny)
-    pz = _powers(p[..., 2], nz)
-    return np.einsum("...i,...j,...k,ijk->...", px, py, pz, coeffs, optimize=True)
+    shape = p.shape[:-1]
+    p = p.reshape(-1, 3)
+    # Contract one variable at a time (a matrix product, then two
+    # row-wise sums): einsum with '...' does not optimise the four-way product.
+    t = _powers(p[:, 0], nx) @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
+    t = np.einsum("kjl,kj->kl", t.reshape(-1, ny, nz), _powers(p[:, 1], ny))
+    return np.einsum("kl,kl->k", t, _powers(p[:, 2], nz)).reshape(shape)
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,6 +35,74 @@ NEWTON_STEP = 1e-15
 #: one cluster: a multiple root such as an edge tangency.
 ROOT_CLUSTER = 1e-7
 
+#: A triangle whose doubled area is below this times its longest edge squared
+#: is flat (its vertices are collinear to rounding): a collapsed feature.
+ZERO_AREA = 1e-12
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8
+
+# ---------------------------------------------------------------------------
+# Classification of singular points (singmesh.skeleton.classify).
+#
+# All four are relative to S, the largest |Taylor coefficient| of degree >= 2
+# of F at the point, in the user's length unit: a coefficient c of any degree
+# is "zero" when |c| <= tol * S.  Comparing coefficients of different degrees
+# needs a length scale; the user's unit is the one the mesher works in (boxes
+# of size ~1), so a feature that only shows below ~1e-7 of it is invisible to
+# the mesh anyway.  The point is assumed known to ~1e-12: that perturbs the
+# Taylor coefficients by ~ d^3 * S * 1e-12 (d the degree), and the splitting
+# lemma amplifies this by at most a few orders of magnitude for well-scaled
+# input, so 1e-7 leaves a margin of >= 1e3 over the noise while staying far
+# below any coefficient a user writes down on purpose.
+# ---------------------------------------------------------------------------
+
+#: A point is singular when |F| and |grad F| there are at most this times S
+#: (plus the rounding error of evaluating them).  A point off a true singular
+#: point by delta has |grad F| ~ 6 S delta, so this accepts delta up to ~1e-9.
+CLASSIFY_SINGULAR_RTOL = 1e-8
+
+#: A Hessian eigenvalue with |lambda| <= this times S counts as zero (sets
+#: the corank).  Noise in the Hessian is ~ |D^3 F| * 1e-12 + rounding.
+CLASSIFY_RANK_RTOL = 1e-7
+
+#: A coefficient of the residual function after the splitting lemma (and of
+#: its cubic form, discriminant and later series) is zero when at most this
+#: times S.  Kept equal to the rank tolerance so that an eigenvalue deemed
+#: zero (|lambda| / 2 as a t^2 coefficient) is also a zero coefficient.
+CLASSIFY_JET_RTOL = 1e-7
+
+#: Truncation orders of the power series tried in turn: A_k is found for
+#: k <= order - 1 and D_k for k <= order + 1; when the residual vanishes to
+#: the last order the point is reported as non-simple (most likely on a
+#: curve of singular points).  Small orders first because they are cheap.
+CLASSIFY_ORDERS = (8, 14, 20)
+
+# ---------------------------------------------------------------- singular points
+#: A box may hold a singular point while F, Fx, Fy and Fz each have Bernstein
+#: coefficients of both signs, counting as zero those below this fraction of
+#: the largest (exact zeros at corners come out of the conversion as 1e-17).
+CANDIDATE_SLACK = 1e-12
+
+#: Newton results with a relative residual max(|F|, |grad F|) / size of F's
+#: terms below this are kept for the multiple-precision check (degenerate
+#: points are only fixed to about eps**(1/k) in double precision).
+SINGULAR_LOOSE = 1e-6
+
+#: A singular point is accepted with a relative residual below this.
+SINGULAR_RESIDUAL = 1e-12
+
+#: Singular points closer than this (relative to the box) are one point.
+SINGULAR_MERGE = 1e-7
+
+#: Depth of the singular-point candidate search (boxes per axis 2**level),
+#: at most the fine level.
+SINGULAR_LEVEL = 8
+
+#: Working digits of the multiple-precision refinement of degenerate points.
+SINGULAR_DPS = 60
+
+#: Hessian eigenvalues below this times the size of F's second-derivative
+#: coefficients count as zero (rank deficiency).
+HESSIAN_RANK = 1e-8

@@ -57,10 +57,9 @@ def on_box(points, box, rel=1e-9) -> np.ndarray:
 
 
 def boundary_edges_off_box(vertices, faces, box):
+    """Boundary edges whose two ends do not lie on one face of the box."""
     v = np.asarray(vertices)
-    return [e for e in boundary_edges(faces)
-            if not any(on_box(v[list(e)], box)[:, None].all(axis=0))
-            and not _same_box_face(v[e[0]], v[e[1]], box)]
+    return [e for e in boundary_edges(faces) if not _same_box_face(v[e[0]], v[e[1]], box)]
 
 
 def _same_box_face(p, q, box, rel=1e-9):
@@ -81,6 +80,8 @@ def duplicate_vertices(vertices, rel=1e-12) -> int:
 
 
 def degenerate_triangles(vertices, faces, rel=1e-14) -> int:
+    if len(faces) == 0:
+        return 0
     p = np.asarray(vertices)[np.asarray(faces)]
     area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
     scale = np.ptp(np.asarray(vertices), axis=0).max() ** 2

@@ -1,0 +1,175 @@
+"""Skeleton curves V(F, grad F . v) from a singular point out to its link cycles.
+
+Around a singular point p the surface meets the boundary of p's star (the
+leaves whose closure holds p) in cycles of face links, one per branch.
+A skeleton curve through p crosses such a cycle at a *face node*: a point
+of the face curve where G = grad F . v changes sign.  This module finds
+the face nodes on a cycle (sign change of G between consecutive link
+vertices, then Newton on F = G = 0 in the face's plane), traces each one's
+curve inward to p (predictor along grad F x grad G, corrector onto
+F = G = 0), and keeps the nodes whose curve reaches p.  The traced points
+become mesh vertices on the links node -> p.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from singmesh.surface import Surface
+
+
+@dataclass
+class SkeletonLink:
+    """A traced skeleton curve from a face node to the singular point.
+
+    Attributes
+    ----------
+    after : int
+        The node lies on the cycle link from vertex ``after`` to the next.
+    t : float
+        Place of the node along that link (0..1), to order nodes.
+    node : (3,) ndarray
+    trace : (k, 3) ndarray
+        Points on the curve from the node towards p (p itself excluded).
+    direction : (3,) ndarray
+        The v of V(F, grad F . v).
+    """
+
+    after: int
+    t: float
+    node: np.ndarray
+    trace: np.ndarray
+    direction: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, axis: int):
+    """Point of F = 0, grad F . v = 0 in the plane x[axis] = a[axis] near segment ab."""
+    u, w = [i for i in range(3) if i != axis]
+    q = 0.5 * (a + b)
+    for _ in range(30):
+        f = surface(q)
+        g = surface.gradient(q)
+        h = surface.hessian(q)
+        gv = g @ v
+        hv = h @ v
+        jac = np.array([[g[u], g[w]], [hv[u], hv[w]]])
+        try:
+            step = np.linalg.solve(jac, [f, gv])
+        except np.linalg.LinAlgError:
+            return None
+        q = q.copy()
+        q[u] -= step[0]
+        q[w] -= step[1]
+        if np.abs(step).max() < 1e-15 * (1 + np.abs(q).max()):
+            break
+    scale = np.linalg.norm(b - a) + 1e-300
+    if not np.isfinite(q).all() or abs(surface(q)) > 1e-11 * (1 + np.abs(surface.gradient(q)).max()):
+        return None
+    # The node must lie on this link's stretch of the face curve.
+    if np.linalg.norm(q - 0.5 * (a + b)) > 0.75 * scale:
+        return None
+    t = float(np.clip(np.dot(q - a, b - a) / scale**2, 0, 1))
+    return q, t
+
+
+def _correct(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: int = 20):
+    """Gauss-Newton (minimum-norm steps) from q onto F = 0, grad F . v = 0."""
+    for _ in range(iterations):
+        g = surface.gradient(q)
+        r = np.array([surface(q), g @ v])
+        j = np.stack([g, surface.hessian(q) @ v])
+        step = np.linalg.pinv(j, rcond=1e-12) @ r
+        q = q - step
+        if np.linalg.norm(step) < 1e-15 * (1 + np.linalg.norm(q)):
+            break
+    return q
+
+
+def trace_to_point(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndarray, pieces: int = 3):
+    """Trace V(F, grad F . v) from ``node`` to ``p``; None if it does not get there.
+
+    The curve is followed in ``pieces`` steps of a third of the distance:
+    predictor along the tangent grad F x grad G (oriented towards p),
+    corrector onto the curve.  It must come closer to p at every step and
+    end within one step of p.
+    """
+    dist0 = np.linalg.norm(node - p)
+    if dist0 == 0:
+        return None
+    h = dist0 / pieces
+    q = node.copy()
+    points = []
+    for k in range(pieces - 1):
+        g = surface.gradient(q)
+        tangent = np.cross(g, surface.hessian(q) @ v)
+        norm = np.linalg.norm(tangent)
+        if norm == 0:
+            return None
+        tangent /= norm
+        if np.dot(tangent, p - q) < 0:
+            tangent = -tangent
+        target = dist0 * (pieces - 1 - k) / pieces
+        guess = q + h * tangent
+        new = _correct(surface, v, guess)
+        d = np.linalg.norm(new - p)
+        on = abs(surface(new)) <= 1e-10 * (1 + np.abs(surface.gradient(new)).max()) * max(dist0, 1e-300)
+        if not on or not np.isfinite(new).all() or abs(d - target) > 0.5 * h or np.linalg.norm(new - q) > 2 * h:
+            return None
+        points.append(new)
+        q = new
+    return np.array(points).reshape(-1, 3)
+
+
+def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray,
+                   directions: np.ndarray, want: int = 4, max_directions: int = 2) -> list[SkeletonLink]:
+    """Face nodes on one link cycle of p whose skeleton curve reaches p.
+
+    Parameters
+    ----------
+    cycle_points : (m, 3) the cycle's vertices in order (consecutive ones
+        share a face)
+    directions : (k, 3) candidate v, best first
+    want : stop adding directions once this many nodes are linked
+    max_directions : use at most this many directions per cycle
+
+    Returns
+    -------
+    list of SkeletonLink, ordered along the cycle
+    """
+    m = len(cycle_points)
+    links: list[SkeletonLink] = []
+    used = 0
+    for v in directions:
+        if used >= max_directions or len(links) >= want:
+            break
+        g = surface.gradient(cycle_points) @ v
+        found = []
+        for i in range(m):
+            a, b = cycle_points[i], cycle_points[(i + 1) % m]
+            if g[i] * g[(i + 1) % m] >= 0:
+                continue
+            # The link lies in a face: the coordinate both ends share exactly.
+            same = np.nonzero(a == b)[0]
+            if len(same) == 0:
+                continue
+            res = _face_node(surface, v, a, b, int(same[0]))
+            if res is None:
+                continue
+            node, t = res
+            trace = trace_to_point(surface, v, node, p)
+            if trace is None:
+                continue
+            found.append(SkeletonLink(after=i, t=t, node=node, trace=trace, direction=v))
+        if found:
+            links.extend(found)
+            used += 1
+    links.sort(key=lambda s: (s.after, s.t))
+    # Two nodes on the same spot (two directions crossing there) are one.
+    out = []
+    for s in links:
+        if out and out[-1].after == s.after and np.linalg.norm(out[-1].node - s.node) < 1e-9:
+            continue
+        out.append(s)
+    return out

@@ -1,0 +1,222 @@
+"""Singular points: where F and all three partial derivatives vanish.
+
+1. Candidate boxes: subdivide the domain with the Bernstein forms of F, Fx,
+   Fy and Fz side by side (stacked arrays, whole-level operations) and
+   keep a box only while all four may vanish on it.
+2. Gauss-Newton on (F, Fx, Fy, Fz) from every candidate box centre, all at
+   once in double precision.
+3. Where the Hessian is degenerate (A2 and beyond, D, E) double precision
+   only fixes the point to about eps**(1/k); those points are refined in
+   multiple precision (mpmath) on the exact sympy polynomial, with a step
+   scaled by the best of 1..8 times the Newton step (the multiplicity of
+   the root along the kernel), which restores fast convergence.
+4. Deduplicate across neighbouring boxes; read the Hessian's rank and
+   signature.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy
+
+from singmesh import tolerances as tol
+from singmesh.boxes.bernstein import bernstein_on_box, split
+from singmesh.surface import VARIABLES, Surface
+
+from .points import SingularPoint
+
+
+def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: int = 4096):
+    """Boxes at ``level`` on which F, Fx, Fy, Fz may all vanish.
+
+    Returns
+    -------
+    lo, hi : (K, 3) ndarrays, the boxes' corners
+    overflow : bool
+        True when the candidates grew past ``max_boxes`` (a curve of
+        singular points, not isolated ones); the search stopped there.
+    """
+    polys = [surface.coeffs, *surface.gradient_coeffs]
+    stacks = [bernstein_on_box(p, box)[None] for p in polys]
+    corner = np.zeros((1, 3), np.int64)
+    for lvl in range(level + 1):
+        keep = np.ones(len(corner), bool)
+        for s in stacks:
+            flat = s.reshape(len(s), -1)
+            # Exact zeros at box corners come out of the conversion as
+            # +-1e-17: allow for the rounding, relative to the coefficients.
+            slack = tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1)
+            keep &= (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+        stacks = [s[keep] for s in stacks]
+        corner = corner[keep]
+        if lvl == level or len(corner) == 0:
+            break
+        if len(corner) > max_boxes:
+            return _corners(box, corner, lvl), True
+        stacks = [split(s).reshape((-1,) + s.shape[1:]) for s in stacks]
+        offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+        corner = (2 * corner[:, None, :] + offsets[None]).reshape(-1, 3)
+    return _corners(box, corner, level), False
+
+
+def _corners(box, corner, level):
+    h = (box[:, 1] - box[:, 0]) / (1 << level)
+    lo = box[:, 0] + corner * h
+    return (lo, lo + h)
+
+
+def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40) -> np.ndarray:
+    """Least-squares Newton on (F, grad F) = 0 from many starts at once."""
+    x = np.array(x, dtype=float)
+    for _ in range(iterations):
+        f = surface(x)
+        g = surface.gradient(x)
+        h = surface.hessian(x)
+        r = np.concatenate([f[:, None], g], axis=1)  # (K, 4)
+        j = np.concatenate([g[:, None, :], h], axis=1)  # (K, 4, 3)
+        step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
+        x = x - step
+    return x
+
+
+def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
+    """max(|F|, |grad F|) relative to the size of F's terms at x."""
+    f = np.abs(surface(x))
+    g = np.abs(surface.gradient(x)).max(axis=-1)
+    scale = np.maximum(surface.magnitude(x), np.abs(surface.coeffs).max())
+    return np.maximum(f, g) / scale
+
+
+def hessian_signature(h: np.ndarray, scale: float) -> tuple[int, int, int]:
+    """(positive, negative, zero) eigenvalues; zero means below
+    ``HESSIAN_RANK`` times ``scale`` (the size of F's second derivatives)."""
+    w = np.linalg.eigvalsh(0.5 * (h + h.T))
+    cut = tol.HESSIAN_RANK * max(scale, 1e-300)
+    return int((w > cut).sum()), int((w < -cut).sum()), int((np.abs(w) <= cut).sum())
+
+
+_STEP_FACTORS = (1, 2, 3, 4, 5, 6, 7, 8, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256)
+
+
+class _MultiPrecision:
+    """grad F and the Hessian of the exact polynomial, in mpmath."""
+
+    def __init__(self, surface: Surface, dps: int):
+        import mpmath
+
+        self.mp = mpmath.mp.clone() if hasattr(mpmath.mp, "clone") else mpmath.mp
+        self.dps = dps
+        grad = [sympy.diff(surface.expr, v) for v in VARIABLES]
+        hess = [[sympy.diff(g, v) for v in VARIABLES] for g in grad]
+        self.grad = sympy.lambdify(VARIABLES, grad, modules="mpmath")
+        self.hess = sympy.lambdify(VARIABLES, hess, modules="mpmath")
+
+    def refine(self, x0: np.ndarray, iterations: int = 200) -> np.ndarray:
+        import mpmath
+
+        with mpmath.workdps(self.dps):
+            x = mpmath.matrix([mpmath.mpf(float(c)) for c in x0])
+            norm = lambda v: mpmath.sqrt(sum(c * c for c in v))  # noqa: E731
+            g = mpmath.matrix(self.grad(*x))
+            for _ in range(iterations):
+                h = mpmath.matrix(self.hess(*x))
+                u, s, v = mpmath.svd_r(h)
+                smax = max(s)
+                if smax == 0:
+                    break
+                # Pseudo-inverse step, ignoring directions the Hessian does
+                # not see at this precision.
+                cut = smax * mpmath.mpf(10) ** (-self.dps // 2)
+                coeff = [(u[:, i].T * g)[0] / s[i] if s[i] > cut else 0 for i in range(3)]
+                step = sum((v[i, :].T * coeff[i] for i in range(3)), mpmath.matrix(3, 1))
+                best, best_x, best_g = norm(g), None, None
+                # Along the kernel of an A_k point, grad F ~ t^k and the
+                # Newton step is t/k: try multiples of it; where the
+                # Jacobian is nearly singular it may overshoot: try halves.
+                for m in _STEP_FACTORS:
+                    xt = x - m * step
+                    gt = mpmath.matrix(self.grad(*xt))
+                    if norm(gt) < best:
+                        best, best_x, best_g = norm(gt), xt, gt
+                if best_x is None:
+                    break
+                moved = norm(best_x - x)
+                x, g = best_x, best_g
+                if moved < mpmath.mpf(10) ** (-self.dps + 10):
+                    break
+            return np.array([float(c) for c in x])
+
+
+def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[SingularPoint], bool]:
+    """Isolated singular points of F = 0 in ``box``.
+
+    Parameters
+    ----------
+    surface : Surface
+    box : (3, 2) array_like
+    level : int
+        Depth of the candidate search (``2**level`` boxes per axis).
+
+    Returns
+    -------
+    points : list of SingularPoint, sorted by coordinates
+    overflow : bool
+        True when the candidates look like a curve of singular points
+        (non-isolated singularities); the points found are then partial.
+    """
+    box = np.asarray(box, dtype=float)
+    (lo, hi), overflow = candidate_boxes(surface, box, level)
+    if len(lo) == 0:
+        return [], overflow
+    x = gauss_newton(surface, (lo + hi) / 2)
+    size = box[:, 1] - box[:, 0]
+    margin = 1e-9 * size
+    inside = np.all((x >= box[:, 0] - margin) & (x <= box[:, 1] + margin), axis=1)
+    # Accept loosely first: degenerate points are only fixed to ~eps^(1/k)
+    # in double precision.  The multiple-precision pass decides.
+    near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
+    ok = inside & near_cell & np.isfinite(x).all(axis=1) & (residual(surface, x) < tol.SINGULAR_LOOSE)
+    x = x[ok]
+    x = _dedupe(x, tol.SINGULAR_MERGE * size.max())
+    hscale = max(max(np.abs(c).max() for row in surface.hessian_coeffs for c in row), 1e-300)
+    mp = None
+    out = []
+    for p in x:
+        h = surface.hessian(p)
+        sig = hessian_signature(h, hscale)
+        if sig[2] > 0 or residual(surface, p) > tol.SINGULAR_RESIDUAL:
+            mp = mp or _MultiPrecision(surface, tol.SINGULAR_DPS)
+            p = mp.refine(p)
+            h = surface.hessian(p)
+            sig = hessian_signature(h, hscale)
+        res = float(residual(surface, p))
+        if res > tol.SINGULAR_RESIDUAL:
+            continue
+        if not np.all((p >= box[:, 0] - margin) & (p <= box[:, 1] + margin)):
+            continue
+        out.append(SingularPoint(point=p, residual=res, hessian_rank=3 - sig[2], signature=sig))
+    pts = _dedupe(np.array([s.point for s in out]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
+    keep = []
+    for q in pts:
+        keep.append(min(out, key=lambda s: np.linalg.norm(s.point - q)))
+    keep.sort(key=lambda s: tuple(s.point))
+    return keep, overflow
+
+
+def _dedupe(x: np.ndarray, radius: float) -> np.ndarray:
+    """One representative per cluster of points closer than ``radius``."""
+    if len(x) == 0:
+        return x.reshape(0, 3)
+    from scipy.cluster.hierarchy import fcluster, linkage
+
+    if len(x) == 1:
+        return x
+    labels = fcluster(linkage(x, method="single"), t=radius, criterion="distance")
+    reps = []
+    for lab in np.unique(labels):
+        members = x[labels == lab]
+        # The member nearest the cluster's centre: deterministic.
+        c = members.mean(axis=0)
+        reps.append(members[np.argmin(np.linalg.norm(members - c, axis=1))])
+    reps = np.array(reps)
+    return reps[np.lexsort(reps.T[::-1])]
