@@ -171,7 +171,19 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
     return result
 
 
-def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int) -> Octree:
+def _holds_any(box, fine_level, level, corner, points, rel=1e-9):
+    """Whether each box (closed, slightly widened) contains one of ``points``."""
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    size = 1 << (fine_level - level)
+    lo = box[:, 0] + corner * cell
+    hi = lo + size * cell
+    pad = rel * size * cell
+    inside = (points[None, :, :] >= (lo - pad)[:, None, :]) & (points[None, :, :] <= (hi + pad)[:, None, :])
+    return inside.all(axis=2).any(axis=1)
+
+
+def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
+              keep_splitting: np.ndarray | None = None) -> Octree:
     """Subdivide ``box`` for the polynomial with monomial tensor ``coeffs``.
 
     Every box is split down to ``coarse_level``; below it only boxes that
@@ -184,6 +196,11 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int) -> Oc
     box : (3, 2) array_like
     coarse_level, fine_level : int
         ``0 <= coarse_level <= fine_level``.
+    keep_splitting : (k, 3) ndarray, optional
+        Points (singular points) whose closed boxes are split down to the
+        fine level whatever the test says: the leaves around such a point
+        are then all of the finest size and their union is a small box
+        with the point inside.
 
     Returns
     -------
@@ -199,6 +216,8 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int) -> Oc
         tensors, corner = tensors[keep], corner[keep]
         if level >= coarse_level:
             simple = monotone_axis(tensors) >= 0
+            if keep_splitting is not None and len(keep_splitting):
+                simple &= ~_holds_any(box, fine_level, level, corner, keep_splitting)
             stop = simple | (level == fine_level)
             leaves_t.append(tensors[stop])
             leaves_c.append(corner[stop])

@@ -30,12 +30,14 @@ class Cycles:
     box : (C,) int64          leaf of each cycle
     offsets : (C+1,) int64    cycle c is ``events[offsets[c]:offsets[c+1]]``
     events : (S,) int64       event indices in cycle order
+    squares : (S,) int64      contact square of the link leaving each event
     broken_boxes : (B,) int64 leaves whose links did not form cycles
     """
 
     box: np.ndarray
     offsets: np.ndarray
     events: np.ndarray
+    squares: np.ndarray
     broken_boxes: np.ndarray
 
     def __len__(self) -> int:
@@ -43,7 +45,7 @@ class Cycles:
 
 
 def box_links(links, group: np.ndarray | None = None):
-    """Links as seen by each box: (box, from_event, to_event).
+    """Links as seen by each box: (box, from_event, to_event, square).
 
     Parameters
     ----------
@@ -65,20 +67,22 @@ def box_links(links, group: np.ndarray | None = None):
     box = np.concatenate([minus[has_minus], plus[has_plus]])
     src = np.concatenate([links.start[has_minus], links.end[has_plus]])
     dst = np.concatenate([links.end[has_minus], links.start[has_plus]])
-    return box, src, dst
+    sq = np.concatenate([links.link_square[has_minus], links.link_square[has_plus]])
+    return box, src, dst, sq
 
 
 def box_graph(box_links_arrays, box: int) -> nx.DiGraph:
     """The link graph of one leaf as a networkx DiGraph (for inspection)."""
-    b, src, dst = box_links_arrays
+    b, src, dst = box_links_arrays[:3]
     sel = b == box
     g = nx.DiGraph()
     g.add_edges_from(zip(src[sel].tolist(), dst[sel].tolist()))
     return g
 
 
-def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, n_events: int) -> Cycles:
-    """Orbits of the successor map of every leaf's links."""
+def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.ndarray,
+                n_events: int) -> Cycles:
+    """Orbits of the successor map of every box's links."""
     node_src = box * n_events + src
     node_dst = box * n_events + dst
     nodes, inv = np.unique(np.concatenate([node_src, node_dst]), return_inverse=True)
@@ -90,11 +94,14 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, n_events: int
     bad_node = (out_deg != 1) | (in_deg != 1)
     broken = np.unique(node_box[bad_node])
     good = ~np.isin(box, broken)
-    a, b = a[good], b[good]
+    a, b, square = a[good], b[good], square[good]
     if len(a) == 0:
-        return Cycles(np.zeros(0, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64), broken)
+        empty = np.zeros(0, np.int64)
+        return Cycles(empty, np.zeros(1, np.int64), empty, empty, broken)
     nxt = np.full(n, -1, np.int64)
     nxt[a] = b
+    out_square = np.full(n, -1, np.int64)
+    out_square[a] = square
     graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
     _, label = connected_components(graph, directed=True, connection="weak")
     used = np.zeros(n, bool)
@@ -118,4 +125,4 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, n_events: int
     uniq_cyc, start = np.unique(cyc, return_index=True)
     offsets = np.append(start, len(idx))
     return Cycles(box=node_box[idx[start]], offsets=offsets, events=nodes[idx] % n_events,
-                  broken_boxes=broken)
+                  squares=out_square[idx], broken_boxes=broken)

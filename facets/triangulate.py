@@ -87,10 +87,13 @@ def triangulate_polygons(
     offsets, indices = polygons
     sizes = np.diff(offsets)
     faces, new_points, owner = [], [], []
+    templated = []  # (slot in faces, polygons, their indices) for re-choosing
     for n in np.unique(sizes):
         sel = np.nonzero(sizes == n)[0]
         poly = indices[offsets[sel][:, None] + np.arange(n)]
         if n <= tol.MAX_TEMPLATE_POLYGON:
+            if n > 3:
+                templated.append((len(faces), poly))
             faces.append(poly if n == 3 else _best_template(poly, points, normals))
             owner.append(np.repeat(sel, n - 2))
             continue
@@ -114,11 +117,47 @@ def triangulate_polygons(
         owner.append(np.repeat(sel, n))
     if not faces:
         return np.zeros((0, 3), np.int64), np.zeros((0, 3)), np.zeros(0, np.int64)
+    # Two facets may pick the same triangle with opposite orientations (the
+    # two sheets of a thin lens that the perturbation collapsed): forbid
+    # such triangles and choose again, for the facets concerned only.
+    n_vertices = len(points) + sum(len(p) for p in new_points)
+    for _ in range(3):
+        dup = _duplicated(np.concatenate(faces), n_vertices)
+        if len(dup) == 0:
+            break
+        for slot, poly in templated:
+            faces[slot] = _best_template(poly, points, normals, forbidden=dup, n_vertices=n_vertices)
+    faces = np.concatenate(faces)
+    owner = np.concatenate(owner)
+    # What is left doubled (two identical 3-gons) is a pillow of zero
+    # volume: both copies go.
+    keys = _triple_keys(faces, n_vertices)
+    _, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    keep = counts[inv] == 1
     new_points = np.concatenate(new_points) if new_points else np.zeros((0, 3))
-    return np.concatenate(faces), new_points, np.concatenate(owner)
+    return faces[keep], new_points, owner[keep]
 
 
-def _best_template(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+def _triple_keys(tri: np.ndarray, n_vertices: int) -> np.ndarray:
+    """One int64 per unordered vertex triple (exact while n_vertices < 2**21)."""
+    t = np.sort(tri, axis=-1).astype(np.int64)
+    if n_vertices >= 1 << 21:  # pragma: no cover - meshes of 2M vertices
+        t = t % (1 << 21)
+    return (t[..., 0] << 42) | (t[..., 1] << 21) | t[..., 2]
+
+
+def _duplicated(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    keys = _triple_keys(faces, n_vertices)
+    uniq, counts = np.unique(keys, return_counts=True)
+    return uniq[counts > 1]
+
+
+def _best_template(poly: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                   forbidden: np.ndarray | None = None, n_vertices: int = 0) -> np.ndarray:
+    """The triangulation of each polygon whose smallest angle is largest.
+
+    Triangles in ``forbidden`` (keys of :func:`_triple_keys`) count as worst.
+    """
     n = poly.shape[1]
     templates = polygon_triangulations(n)
     combos = np.array(list(combinations(range(n), 3)))
@@ -126,6 +165,8 @@ def _best_template(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) ->
     tmpl_idx = np.array([[lookup[tuple(sorted(t))] for t in tr] for tr in templates])
     normal = normals[poly].sum(axis=1)
     q = triangle_quality(points[poly[:, combos]], normal[:, None, :])  # (P, C)
+    if forbidden is not None and len(forbidden):
+        q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), -2.0, q)
     score = q[:, tmpl_idx].min(axis=2)  # (P, T)
     best = np.argmax(score, axis=1)
     tri_local = templates[best]  # (P, n-2, 3)

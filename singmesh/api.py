@@ -89,12 +89,13 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     if fine_level < coarse_level:
         raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
 
-    tree = subdivide(surf.coeffs, b, coarse_level, fine_level)
-    events = compute_events(surf, tree)
-    links = face_links(tree, events)
     t_sing = time.perf_counter()
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
     t_sing = time.perf_counter() - t_sing
+    at = np.array([sp.point for sp in points]).reshape(-1, 3)
+    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=None if overflow else at)
+    events = compute_events(surf, tree)
+    links = face_links(tree, events)
 
     # Each singular point's star (the leaves whose closure holds it) is one
     # box: p lies strictly inside it, wherever the split planes fall.
@@ -111,7 +112,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         stars[len(tree.level) + i] = i
     cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
 
-    offsets, keys, pts, apex, branches = _polygons(surf, events, cycles, stars, points)
+    offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=lambda q: project_to_surface(surf, q), apex=apex)
     singular = []
@@ -141,7 +142,18 @@ def _point_key(i: int) -> int:
     return -1 - i
 
 
-def _polygons(surf, events, cycles, stars, points):
+def _square_bounds(tree, square):
+    """(axis, lo, hi) in space of a contact square row (n, plane, u0, v0, size)."""
+    n, plane, u0, v0, size = (int(c) for c in square)
+    lo = np.zeros(3, np.int64)
+    lo[n], lo[(n + 1) % 3], lo[(n + 2) % 3] = plane, u0, v0
+    hi = lo.copy()
+    hi[(n + 1) % 3] += size
+    hi[(n + 2) % 3] += size
+    return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
+
+
+def _polygons(surf, tree, events, links, cycles, stars, points):
     """Facet polygons (offsets, keys, points, apex flags) and branch counts.
 
     Plain boxes give one polygon per cycle; the star of a singular point
@@ -162,10 +174,12 @@ def _polygons(surf, events, cycles, stars, points):
     for c in np.nonzero(~plain)[0]:
         i = stars[cycles.box[c]]
         p = points[i].point
-        cyc = ev[cycles.offsets[c]:cycles.offsets[c + 1]]
+        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
+        cyc = ev[span]
         cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
-        links = skeleton_links(surf, p, cyc_pts, skeleton_directions(surf.hessian(p)))
-        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, links, next_key)
+        squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
+        spokes = skeleton_links(surf, p, cyc_pts, squares, skeleton_directions(surf.hessian(p)))
+        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key)
         splits.update(split)
         for k, q in polys:
             parts_keys.append(k)

@@ -44,10 +44,18 @@ class SkeletonLink:
     direction: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
-def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, axis: int):
-    """Point of F = 0, grad F . v = 0 in the plane x[axis] = a[axis] near segment ab."""
+def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, square: np.ndarray):
+    """Point of F = 0, grad F . v = 0 in a face square, on the arc from a to b.
+
+    ``square`` is (axis, lo, hi) with lo, hi the square's corners in space.
+    Newton starts half-way between the link's midpoint and the square's
+    centre: two arcs with the same end points (the two halves of a thin
+    lens) then find their own nodes.
+    """
+    axis, lo, hi = square
     u, w = [i for i in range(3) if i != axis]
-    q = 0.5 * (a + b)
+    q = 0.5 * (0.5 * (a + b) + 0.5 * (lo + hi))
+    q[axis] = a[axis]
     for _ in range(30):
         f = surface(q)
         g = surface.gradient(q)
@@ -64,13 +72,14 @@ def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, ax
         q[w] -= step[1]
         if np.abs(step).max() < 1e-15 * (1 + np.abs(q).max()):
             break
-    scale = np.linalg.norm(b - a) + 1e-300
     if not np.isfinite(q).all() or abs(surface(q)) > 1e-11 * (1 + np.abs(surface.gradient(q)).max()):
         return None
-    # The node must lie on this link's stretch of the face curve.
-    if np.linalg.norm(q - 0.5 * (a + b)) > 0.75 * scale:
+    # The node must lie in this link's square.
+    slack = 1e-9 * (hi - lo).max()
+    if (q < lo - slack).any() or (q > hi + slack).any():
         return None
-    t = float(np.clip(np.dot(q - a, b - a) / scale**2, 0, 1))
+    d = b - a
+    t = float(np.clip(np.dot(q - a, d) / max(np.dot(d, d), 1e-300), 0, 1))
     return q, t
 
 
@@ -122,7 +131,7 @@ def trace_to_point(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndar
     return np.array(points).reshape(-1, 3)
 
 
-def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray,
+def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, squares: list,
                    directions: np.ndarray, want: int = 4, max_directions: int = 2) -> list[SkeletonLink]:
     """Face nodes on one link cycle of p whose skeleton curve reaches p.
 
@@ -130,6 +139,8 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray,
     ----------
     cycle_points : (m, 3) the cycle's vertices in order (consecutive ones
         share a face)
+    squares : m entries (axis, lo, hi): the face square of the link from
+        vertex i to vertex i + 1
     directions : (k, 3) candidate v, best first
     want : stop adding directions once this many nodes are linked
     max_directions : use at most this many directions per cycle
@@ -150,11 +161,7 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray,
             a, b = cycle_points[i], cycle_points[(i + 1) % m]
             if g[i] * g[(i + 1) % m] >= 0:
                 continue
-            # The link lies in a face: the coordinate both ends share exactly.
-            same = np.nonzero(a == b)[0]
-            if len(same) == 0:
-                continue
-            res = _face_node(surface, v, a, b, int(same[0]))
+            res = _face_node(surface, v, a, b, squares[i])
             if res is None:
                 continue
             node, t = res
