@@ -36,51 +36,69 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     """
     m = len(cycle_keys)
     splits: dict = {}
-
-    def record(s, key):
-        a, b = int(cycle_keys[s.after]), int(cycle_keys[(s.after + 1) % m])
-        splits.setdefault((a, b), []).append((key, s.node))
-
-    if len(links) < 2:
-        keys = [p_key]
-        pts = [p]
-        for i in range(m):
-            keys.append(int(cycle_keys[i]))
-            pts.append(cycle_points[i])
-            for s in links:
-                if s.after == i:
-                    record(s, next_key)
-                    keys.append(next_key)
-                    pts.append(s.node)
-                    next_key += 1
-        return [(np.array(keys), np.array(pts))], splits, next_key
-
-    # Keys for each link's node and traced points (node first, then inwards).
-    spokes = []
-    for s in links:
-        pts = np.concatenate([s.node[None], s.trace])
-        keys = np.arange(next_key, next_key + len(pts))
-        next_key += len(pts)
-        spokes.append((keys, pts))
-        record(s, int(keys[0]))
+    # The cycle with the face nodes inserted; anchors are the places where
+    # a spoke (skeleton link) meets it.
+    keys, pts, spokes = [], [], []
+    for i in range(m):
+        keys.append(int(cycle_keys[i]))
+        pts.append(cycle_points[i])
+        for s in (s for s in links if s.after == i):
+            node_key = next_key
+            trace_keys = list(range(next_key + 1, next_key + 1 + len(s.trace)))
+            next_key += 1 + len(s.trace)
+            a, b = int(cycle_keys[i]), int(cycle_keys[(i + 1) % m])
+            splits.setdefault((a, b), []).append((node_key, s.node))
+            spokes.append((len(keys), trace_keys, list(s.trace)))
+            keys.append(node_key)
+            pts.append(s.node)
+    n = len(keys)
+    if len(spokes) < 2:
+        # Fewer than two skeleton links: anchor the sectors at cycle
+        # vertices (with straight spokes) so that they still close around p.
+        first = spokes[0][0] if spokes else 0
+        extra = (first + n // 2) % n
+        spokes = sorted(spokes + [(first, [], [])] * (not spokes) + [(extra, [], [])])
+    if n < 3 or len({a for a, _, _ in spokes}) < 2:
+        return [], splits, next_key  # a collapsed cycle: no area to fan
     polygons = []
-    for k, s in enumerate(links):
-        nxt = links[(k + 1) % len(links)]
-        keys = [p_key] + spokes[k][0][::-1].tolist()
-        pts = [p] + list(spokes[k][1][::-1])
-        i = s.after
-        # Walk the cycle from just after node k to just before node k+1.
-        steps = (nxt.after - s.after) % m
-        if steps == 0 and (k + 1) % len(links) != k and nxt.t <= s.t:
-            steps = m
-        for j in range(1, steps + 1):
-            idx = (i + j) % m
-            keys.append(int(cycle_keys[idx]))
-            pts.append(cycle_points[idx])
-        keys += spokes[(k + 1) % len(links)][0].tolist()
-        pts += list(spokes[(k + 1) % len(links)][1])
-        polygons.append((np.array(keys), np.array(pts)))
+    for k, (at, tkeys, tpts) in enumerate(spokes):
+        nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
+        steps = (nxt_at - at) % n or n
+        # Spoke A runs out from p to the cycle, spoke B back in from it.
+        a_keys = [p_key] + tkeys[::-1] + [keys[at]]
+        a_pts = [p] + tpts[::-1] + [pts[at]]
+        b_keys = [p_key] + nkeys[::-1] + [keys[nxt_at]]
+        b_pts = [p] + npts[::-1] + [pts[nxt_at]]
+        polygons += _zip_spokes(a_keys, a_pts, b_keys, b_pts)
+        # The outer part: the cycle from A's end to B's end, closed by the
+        # zipper's last edge (nothing left when they are neighbours).
+        if steps >= 2:
+            polygons.append((np.array([keys[(at + j) % n] for j in range(steps + 1)], np.int64),
+                             np.array([pts[(at + j) % n] for j in range(steps + 1)])))
     return polygons, splits, next_key
+
+
+def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> list:
+    """Triangles between two spokes sharing their first vertex p.
+
+    Rings from p outwards, each step advancing on the spoke whose next
+    point gives the shorter diagonal: no triangle lies along one spoke,
+    so neighbouring sectors never pick the same sliver.
+    """
+    tris = []
+    i = j = 1
+    tris.append(([a_keys[0], a_keys[1], b_keys[1]], [a_pts[0], a_pts[1], b_pts[1]]))
+    while i < len(a_keys) - 1 or j < len(b_keys) - 1:
+        adv_a = j == len(b_keys) - 1 or (
+            i < len(a_keys) - 1
+            and np.linalg.norm(a_pts[i + 1] - b_pts[j]) <= np.linalg.norm(a_pts[i] - b_pts[j + 1]))
+        if adv_a:
+            tris.append(([a_keys[i], a_keys[i + 1], b_keys[j]], [a_pts[i], a_pts[i + 1], b_pts[j]]))
+            i += 1
+        else:
+            tris.append(([a_keys[i], b_keys[j + 1], b_keys[j]], [a_pts[i], b_pts[j + 1], b_pts[j]]))
+            j += 1
+    return [(np.array(k, np.int64), np.array(q)) for k, q in tris]
 
 
 def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray, splits: dict):

@@ -6,6 +6,8 @@ import time
 from dataclasses import replace
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
@@ -97,19 +99,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     events = compute_events(surf, tree)
     links = face_links(tree, events)
 
-    # Each singular point's star (the leaves whose closure holds it) is one
-    # box: p lies strictly inside it, wherever the split planes fall.
-    group = np.arange(len(tree.level), dtype=np.int64)
-    stars, clashes = {}, 0
-    for i, sp in enumerate(points):
-        leaves = star(tree, sp.point)
-        if len(leaves) == 0:
-            continue  # no surface around it: an isolated real point
-        if (group[leaves] >= len(tree.level)).any():
-            clashes += 1  # stars overlap: leave this one to the plain facets
-            continue
-        group[leaves] = len(tree.level) + i
-        stars[len(tree.level) + i] = i
+    group, stars, clashes = _stars(tree, links, points)
     cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
 
     offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
@@ -135,6 +125,55 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "time": time.perf_counter() - t0,
     }
     return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats)
+
+
+def _stars(tree, links, points):
+    """Group the leaves around each singular point into one box, its star.
+
+    The star of p is the connected set (across shared faces) of leaves that
+    failed the simplicity test, grown from the leaves whose closure holds
+    p.  Outside it every leaf is simple, so its surface is a union of discs
+    and the cycles on the star's boundary are p's link components.  Where
+    two stars meet they shrink back to the leaves holding their points.
+
+    Returns
+    -------
+    group : (N,) int64    box id of every leaf (N + i for the star of point i)
+    stars : dict          box id -> index of the singular point
+    clashes : int         singular points left without a star
+    """
+    n = len(tree.level)
+    both = (links.minus >= 0) & (links.plus >= 0)
+    a, b = links.minus[both], links.plus[both]
+    grow = ~tree.simple[a] & ~tree.simple[b]
+    adj = coo_matrix((np.ones(grow.sum()), (a[grow], b[grow])), shape=(n, n))
+    _, label = connected_components(adj, directed=False)
+    seeds = [star(tree, sp.point) for sp in points]
+    regions = []
+    for leaves in seeds:
+        if len(leaves) == 0:
+            regions.append(leaves)  # no surface around: an isolated real point
+            continue
+        grown = np.nonzero(np.isin(label, label[leaves[~tree.simple[leaves]]]))[0]
+        regions.append(np.union1d(leaves, grown))
+    owner = np.full(n, -1, np.int64)
+    count = np.zeros(n, np.int64)
+    for i, r in enumerate(regions):
+        count[r] += 1
+    group = np.arange(n, dtype=np.int64)
+    stars, clashes = {}, 0
+    for i, r in enumerate(regions):
+        if len(r) == 0:
+            continue
+        if (count[r] > 1).any():
+            r = seeds[i]  # regions overlap: keep only the leaves holding p
+        if (owner[r] >= 0).any():
+            clashes += 1
+            continue
+        owner[r] = i
+        group[r] = n + i
+        stars[n + i] = i
+    return group, stars, clashes
 
 
 def _point_key(i: int) -> int:

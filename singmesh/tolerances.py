@@ -12,6 +12,10 @@ MAX_DEGREE = 18
 #: ``2**MAX_LEVEL``.  Keeps integer lattice keys well inside int64.
 MAX_LEVEL = 14
 
+#: A box is empty when all its Bernstein coefficients exceed this fraction of
+#: the largest one in one sign: below it, a coefficient may be a rounded zero.
+PRUNE_SLACK = 1e-10
+
 #: A value computed in floating point is taken for exactly zero when its
 #: magnitude is below this many ulps of the magnitude of the terms summed
 #: to get it (the rounding-error bound of the evaluation).
