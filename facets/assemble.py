@@ -113,7 +113,9 @@ def assemble(
     fan = None if apex is None else apex[src]
     faces, extra, _ = triangulate_polygons((offsets, poly), vertices, normals, project, fan)
     vertices = np.concatenate([vertices, extra])
-    vkeys = np.concatenate([uniq, np.full(len(extra), -1, np.int64)])
+    # Centre vertices have no key of their own: mark them with one no
+    # event or singular point can have.
+    vkeys = np.concatenate([uniq, np.full(len(extra), np.iinfo(np.int64).min, np.int64)])
     # A facet whose vertices all collapsed onto a line (a sliver of F + eps
     # of infinitesimal width, e.g. along a lattice line lying in the
     # surface) has no area: its triangles go.  Elsewhere the template

@@ -10,6 +10,8 @@ keep the cycle's orientation, so the fans agree with the rest of the mesh.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 
@@ -36,13 +38,20 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     """
     m = len(cycle_keys)
     splits: dict = {}
+    # A cycle small next to its distance from p (a sharp cusp): traced
+    # points would crowd together near p; its spokes go straight.
+    size = np.ptp(cycle_points, axis=0).max() if m else 0.0
+    if size < 0.05 * np.linalg.norm(cycle_points - p, axis=1).min():
+        links = [replace(s, trace=np.zeros((0, 3))) for s in links]
     # The cycle with the face nodes inserted; anchors are the places where
     # a spoke (skeleton link) meets it.
     keys, pts, spokes = [], [], []
+    expanded = {}
     for i in range(m):
+        expanded[i] = len(keys)
         keys.append(int(cycle_keys[i]))
         pts.append(cycle_points[i])
-        for s in (s for s in links if s.after == i):
+        for s in (s for s in links if s.after == i and s.vertex is None):
             node_key = next_key
             trace_keys = list(range(next_key + 1, next_key + 1 + len(s.trace)))
             next_key += 1 + len(s.trace)
@@ -52,6 +61,12 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
             keys.append(node_key)
             pts.append(s.node)
     n = len(keys)
+    for s in links:
+        if s.vertex is not None:
+            tk = list(range(next_key, next_key + len(s.trace)))
+            next_key += len(s.trace)
+            spokes.append((expanded[s.vertex], tk, list(s.trace)))
+    spokes.sort(key=lambda sp: sp[0])
     if len(spokes) < 2:
         # Fewer than two skeleton links: anchor the sectors at cycle
         # vertices (with straight spokes) so that they still close around p.
@@ -60,7 +75,22 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         spokes = sorted(spokes + [(first, [], [])] * (not spokes) + [(extra, [], [])])
     if n < 3 or len({a for a, _, _ in spokes}) < 2:
         return [], splits, next_key  # a collapsed cycle: no area to fan
-    polygons = []
+    spokes = _narrow_sectors(spokes, p, keys, pts)
+    # Traced points are for shape only: a spoke whose points make a flat
+    # triangle with a neighbour's (two traces on one line of the skeleton)
+    # goes straight, and the sectors are built again.
+    for _ in range(len(spokes) + 1):
+        polygons, flat = _sectors(spokes, p_key, p, keys, pts)
+        if not flat:
+            break
+        spokes = [(sp[0], [], []) if k in flat else sp for k, sp in enumerate(spokes)]
+    return polygons, splits, next_key
+
+
+def _sectors(spokes, p_key, p, keys, pts):
+    """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
+    n = len(keys)
+    polygons, flat = [], set()
     for k, (at, tkeys, tpts) in enumerate(spokes):
         nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
         steps = (nxt_at - at) % n or n
@@ -69,13 +99,46 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         a_pts = [p] + tpts[::-1] + [pts[at]]
         b_keys = [p_key] + nkeys[::-1] + [keys[nxt_at]]
         b_pts = [p] + npts[::-1] + [pts[nxt_at]]
-        polygons += _zip_spokes(a_keys, a_pts, b_keys, b_pts)
+        zipped = _zip_spokes(a_keys, a_pts, b_keys, b_pts)
+        for _, q in zipped:
+            e = [q[1] - q[0], q[2] - q[1], q[0] - q[2]]
+            area2 = np.linalg.norm(np.cross(e[0], -e[2]))
+            if area2 <= 1e-6 * max(np.dot(x, x) for x in e):
+                flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+        polygons += zipped
         # The outer part: the cycle from A's end to B's end, closed by the
         # zipper's last edge (nothing left when they are neighbours).
         if steps >= 2:
             polygons.append((np.array([keys[(at + j) % n] for j in range(steps + 1)], np.int64),
                              np.array([pts[(at + j) % n] for j in range(steps + 1)])))
-    return polygons, splits, next_key
+    return polygons, flat
+
+
+def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angle: float = 2.0) -> list:
+    """Add straight spokes to cycle vertices until no sector opens wider than
+    ``max_angle`` (radians) at p: a ring of triangles from p needs each
+    sector to turn less than half a revolution there."""
+    n = len(keys)
+
+    def first_point(spoke):
+        at, _, tpts = spoke
+        return tpts[-1] if tpts else pts[at]
+
+    for _ in range(4 * n):
+        out, changed = [], False
+        for k, sp in enumerate(spokes):
+            nxt = spokes[(k + 1) % len(spokes)]
+            out.append(sp)
+            u, w = first_point(sp) - p, first_point(nxt) - p
+            cos = np.dot(u, w) / max(np.linalg.norm(u) * np.linalg.norm(w), 1e-300)
+            steps = (nxt[0] - sp[0]) % n or n
+            if np.arccos(np.clip(cos, -1, 1)) > max_angle and steps >= 2:
+                out.append(((sp[0] + steps // 2) % n, [], []))
+                changed = True
+        spokes = out
+        if not changed:
+            break
+    return spokes
 
 
 def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> list:

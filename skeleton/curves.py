@@ -35,6 +35,9 @@ class SkeletonLink:
         Points on the curve from the node towards p (p itself excluded).
     direction : (3,) ndarray
         The v of V(F, grad F . v).
+    vertex : int or None
+        When the node is (to rounding) a vertex of the cycle, that vertex;
+        the spoke then ends there and no new vertex is made.
     """
 
     after: int
@@ -42,6 +45,7 @@ class SkeletonLink:
     node: np.ndarray
     trace: np.ndarray
     direction: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    vertex: int | None = None
 
 
 def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, square: np.ndarray):
@@ -165,18 +169,22 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, sq
             if res is None:
                 continue
             node, t = res
+            near = 1e-6 * np.linalg.norm(b - a)
+            vertex = None
+            # A node on (to rounding) a cycle vertex: the skeleton passes
+            # through that vertex; anchor the spoke there.
+            if np.linalg.norm(node - a) <= near:
+                vertex, node, t = i, a.copy(), 0.0
+            elif np.linalg.norm(node - b) <= near:
+                vertex, node, t = (i + 1) % m, b.copy(), 1.0
+            if any(np.linalg.norm(node - s.node) <= near for s in links + found):
+                continue  # two directions crossing the cycle at one point
             trace = trace_to_point(surface, v, node, p)
             if trace is None:
                 continue
-            found.append(SkeletonLink(after=i, t=t, node=node, trace=trace, direction=v))
+            found.append(SkeletonLink(after=i, t=t, node=node, trace=trace, direction=v, vertex=vertex))
         if found:
             links.extend(found)
             used += 1
     links.sort(key=lambda s: (s.after, s.t))
-    # Two nodes on the same spot (two directions crossing there) are one.
-    out = []
-    for s in links:
-        if out and out[-1].after == s.after and np.linalg.norm(out[-1].node - s.node) < 1e-9:
-            continue
-        out.append(s)
-    return out
+    return links

@@ -79,15 +79,17 @@ def duplicate_vertices(vertices, rel=1e-12) -> int:
     return len(q) - len(np.unique(q, axis=0))
 
 
-def degenerate_triangles(vertices, faces, rel=1e-14) -> int:
+def degenerate_triangles(vertices, faces, rel=1e-10) -> int:
+    """Triangles with a repeated vertex or collinear vertices (zero area
+    relative to their own longest edge: size alone is no defect)."""
+    faces = np.asarray(faces)
     if len(faces) == 0:
         return 0
-    p = np.asarray(vertices)[np.asarray(faces)]
+    p = np.asarray(vertices)[faces]
     area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-    scale = np.ptp(np.asarray(vertices), axis=0).max() ** 2
-    repeated = (np.asarray(faces)[:, 0] == np.asarray(faces)[:, 1]) | \
-        (np.asarray(faces)[:, 1] == np.asarray(faces)[:, 2]) | (np.asarray(faces)[:, 0] == np.asarray(faces)[:, 2])
-    return int(((area2 <= rel * scale) | repeated).sum())
+    longest = np.max([np.sum((p[:, i] - p[:, (i + 1) % 3]) ** 2, axis=1) for i in range(3)], axis=0)
+    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
+    return int(((area2 <= rel * longest) | repeated).sum())
 
 
 def fans_at(faces, vertex: int) -> int:
