@@ -4,9 +4,9 @@ Boxes are addressed on the integer lattice of the finest level: a box at
 ``level`` has its lower corner at ``corner`` (lattice units) and side
 ``2**(fine_level - level)``.  Exact zeros follow one rule everywhere
 (simulation of simplicity): F is meshed as if it were F + eps for an
-infinitesimal eps > 0.  So a box whose coefficients are all >= 0 holds no
-surface (F + eps > 0 there), and one whose coefficients are all < 0 holds
-none either.
+infinitesimal eps > 0.  A box is pruned only when its coefficients are
+all clearly positive or all clearly negative (beyond rounding): then F has
+no zero in it at all, and no event can lie on its boundary.
 
 A box is *simple* when the surface in it is a union of discs, each bounded
 by one cycle of face links.  The test used: some partial derivative F_a is
@@ -24,6 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from singmesh import tolerances as tol
 
 from .bernstein import bernstein_on_box, derivative, sign_definite, split
 
@@ -140,9 +142,15 @@ def star(tree: Octree, point: np.ndarray, rel: float = 1e-9) -> np.ndarray:
 
 
 def empty_boxes(tensors: np.ndarray) -> np.ndarray:
-    """Boxes where F + eps has no zero: all coefficients >= 0, or all < 0."""
+    """Boxes where F certainly has no zero: all coefficients > slack, or all < -slack.
+
+    The slack (``PRUNE_SLACK`` of the largest coefficient) keeps boxes where
+    F may vanish up to rounding, e.g. exactly at a corner: pruning such a
+    box would leave a hole in the faces that carry the events found there.
+    """
     flat = tensors.reshape(len(tensors), -1)
-    return (flat.min(axis=1) >= 0) | (flat.max(axis=1) < 0)
+    slack = tol.PRUNE_SLACK * np.abs(flat).max(axis=1)
+    return (flat.min(axis=1) > slack) | (flat.max(axis=1) < -slack)
 
 
 def face_without_loops(face: np.ndarray) -> np.ndarray:
@@ -171,15 +179,15 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
     return result
 
 
-def _holds_any(box, fine_level, level, corner, points, rel=1e-9):
-    """Whether each box (closed, slightly widened) contains one of ``points``."""
+def _meets_any(box, fine_level, level, corner, regions, rel=1e-9):
+    """Whether each box (closed, slightly widened) meets one of ``regions``."""
     cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
     size = 1 << (fine_level - level)
     lo = box[:, 0] + corner * cell
     hi = lo + size * cell
     pad = rel * size * cell
-    inside = (points[None, :, :] >= (lo - pad)[:, None, :]) & (points[None, :, :] <= (hi + pad)[:, None, :])
-    return inside.all(axis=2).any(axis=1)
+    meets = ((lo - pad)[:, None, :] <= regions[None, :, 1, :]) & ((hi + pad)[:, None, :] >= regions[None, :, 0, :])
+    return meets.all(axis=2).any(axis=1)
 
 
 def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
@@ -196,11 +204,10 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
     box : (3, 2) array_like
     coarse_level, fine_level : int
         ``0 <= coarse_level <= fine_level``.
-    keep_splitting : (k, 3) ndarray, optional
-        Points (singular points) whose closed boxes are split down to the
-        fine level whatever the test says: the leaves around such a point
-        are then all of the finest size and their union is a small box
-        with the point inside.
+    keep_splitting : (k, 2, 3) ndarray, optional
+        Regions (lo, hi corners in space) whose boxes are split down to the
+        fine level whatever the test says: the cubes around singular
+        points, which are then tiled exactly by leaves of the finest size.
 
     Returns
     -------
@@ -217,7 +224,7 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
         if level >= coarse_level:
             simple = monotone_axis(tensors) >= 0
             if keep_splitting is not None and len(keep_splitting):
-                simple &= ~_holds_any(box, fine_level, level, corner, keep_splitting)
+                simple &= ~_meets_any(box, fine_level, level, corner, keep_splitting)
             stop = simple | (level == fine_level)
             leaves_t.append(tensors[stop])
             leaves_c.append(corner[stop])

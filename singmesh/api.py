@@ -94,12 +94,22 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     t_sing = time.perf_counter()
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
     t_sing = time.perf_counter() - t_sing
-    at = np.array([sp.point for sp in points]).reshape(-1, 3)
-    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=None if overflow else at)
+    cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
+    # First pass: the boxes at each singular point go to the fine level.
+    cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
+    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=None if overflow else cubes)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
+    if len(points) and not overflow:
+        # Second pass: each star becomes a cube around its point, large
+        # enough to hold the boxes that failed the simplicity test there,
+        # and tiled by fine leaves.
+        cubes = _star_cubes(tree, links, points)
+        tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=cubes)
+        events = compute_events(surf, tree)
+        links = face_links(tree, events)
 
-    group, stars, clashes = _stars(tree, links, points)
+    group, stars, clashes = _stars(tree, cubes if len(points) and not overflow else None, points)
     cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
 
     offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
@@ -127,20 +137,18 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats)
 
 
-def _stars(tree, links, points):
-    """Group the leaves around each singular point into one box, its star.
+def _star_cubes(tree, links, points) -> np.ndarray:
+    """A lattice cube around each singular point: its star.
 
-    The star of p is the connected set (across shared faces) of leaves that
-    failed the simplicity test, grown from the leaves whose closure holds
-    p.  Outside it every leaf is simple, so its surface is a union of discs
-    and the cycles on the star's boundary are p's link components.  Where
-    two stars meet they shrink back to the leaves holding their points.
+    The cube holds the connected set (across shared faces) of leaves that
+    failed the simplicity test grown from the leaves around p, so that
+    every leaf outside it is simple (its surface a union of discs) and the
+    surface inside is the cone over the cycles on the cube's boundary.
+    Overlapping cubes shrink to one fine cell around their points.
 
     Returns
     -------
-    group : (N,) int64    box id of every leaf (N + i for the star of point i)
-    stars : dict          box id -> index of the singular point
-    clashes : int         singular points left without a star
+    (k, 2, 3) ndarray of (lo, hi) corners in space
     """
     n = len(tree.level)
     both = (links.minus >= 0) & (links.plus >= 0)
@@ -148,30 +156,54 @@ def _stars(tree, links, points):
     grow = ~tree.simple[a] & ~tree.simple[b]
     adj = coo_matrix((np.ones(grow.sum()), (a[grow], b[grow])), shape=(n, n))
     _, label = connected_components(adj, directed=False)
-    seeds = [star(tree, sp.point) for sp in points]
-    regions = []
-    for leaves in seeds:
-        if len(leaves) == 0:
-            regions.append(leaves)  # no surface around: an isolated real point
-            continue
-        grown = np.nonzero(np.isin(label, label[leaves[~tree.simple[leaves]]]))[0]
-        regions.append(np.union1d(leaves, grown))
-    owner = np.full(n, -1, np.int64)
-    count = np.zeros(n, np.int64)
-    for i, r in enumerate(regions):
-        count[r] += 1
+    top = 1 << tree.fine_level
+    cap = top // 8
+    boxes = []
+    for sp in points:
+        p = (sp.point - tree.box[:, 0]) / tree.cell
+        seeds = star(tree, sp.point)
+        radius = 1.0
+        if len(seeds):
+            region = np.nonzero(np.isin(label, label[seeds]))[0]
+            lo = tree.corner[region].min(axis=0)
+            hi = (tree.corner[region] + tree.size[region][:, None]).max(axis=0)
+            radius = min(max(np.max(p - lo), np.max(hi - p), 1.0), cap)
+        boxes.append([np.clip(np.floor(p - radius), 0, top), np.clip(np.ceil(p + radius), 0, top)])
+    boxes = np.array(boxes, dtype=np.int64).reshape(-1, 2, 3)
+    for i in range(len(boxes)):
+        for j in range(i):
+            if (boxes[i, 0] < boxes[j, 1]).all() and (boxes[j, 0] < boxes[i, 1]).all():
+                for k in (i, j):
+                    p = (points[k].point - tree.box[:, 0]) / tree.cell
+                    boxes[k] = [np.floor(p - 1), np.ceil(p + 1)]
+    return tree.box[:, 0] + boxes * tree.cell
+
+
+def _stars(tree, cubes, points):
+    """Group the leaves of each star cube into one box.
+
+    Returns
+    -------
+    group : (N,) int64    box id of every leaf (N + i for the star of point i)
+    stars : dict          box id -> index of the singular point
+    clashes : int         singular points left without a star (cubes met)
+    """
+    n = len(tree.level)
     group = np.arange(n, dtype=np.int64)
     stars, clashes = {}, 0
-    for i, r in enumerate(regions):
-        if len(r) == 0:
-            continue
-        if (count[r] > 1).any():
-            r = seeds[i]  # regions overlap: keep only the leaves holding p
-        if (owner[r] >= 0).any():
+    if cubes is None:
+        return group, stars, clashes
+    lo_leaf = tree.lattice_to_space(tree.corner)
+    hi_leaf = tree.lattice_to_space(tree.corner + tree.size[:, None])
+    pad = 1e-9 * tree.cell
+    for i, (lo, hi) in enumerate(cubes):
+        inside = np.nonzero(((lo_leaf >= lo - pad) & (hi_leaf <= hi + pad)).all(axis=1))[0]
+        if len(inside) == 0 or len(star(tree, points[i].point)) == 0:
+            continue  # no surface around it: an isolated real point
+        if (group[inside] >= n).any():
             clashes += 1
             continue
-        owner[r] = i
-        group[r] = n + i
+        group[inside] = n + i
         stars[n + i] = i
     return group, stars, clashes
 
