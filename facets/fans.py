@@ -16,7 +16,7 @@ import numpy as np
 
 
 def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_points: np.ndarray,
-                    links: list, next_key: int):
+                    links: list, next_key: int, cycle_squares: np.ndarray | None = None):
     """Sector polygons of one cycle of a singular point.
 
     Parameters
@@ -26,14 +26,18 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     links : list of :class:`singmesh.skeleton.curves.SkeletonLink`, ordered
         along the cycle
     next_key : first unused vertex key (for nodes and traced points)
+    cycle_squares : (m,) int64, optional
+        The contact square of the link leaving each cycle vertex.
 
     Returns
     -------
     polygons : list of (keys (k,), points (k, 3)); the first vertex is p
     splits : dict
-        ``(a, b) -> [(node_key, node_point), ...]`` for every cycle link
-        a -> b that received face nodes (in order from a to b): the polygon
-        on the other side of that link must get them too.
+        ``(square, a, b) -> [(node_key, node_point), ...]`` for every cycle
+        link a -> b (on that square) that received face nodes, in order
+        from a to b: the polygon on the other side of that link must get
+        them too.  Two links may join the same two vertices on different
+        squares, hence the square in the key.
     next_key : int
     """
     m = len(cycle_keys)
@@ -56,7 +60,8 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
             trace_keys = list(range(next_key + 1, next_key + 1 + len(s.trace)))
             next_key += 1 + len(s.trace)
             a, b = int(cycle_keys[i]), int(cycle_keys[(i + 1) % m])
-            splits.setdefault((a, b), []).append((node_key, s.node))
+            sq = -1 if cycle_squares is None else int(cycle_squares[i])
+            splits.setdefault((sq, a, b), []).append((node_key, s.node))
             spokes.append((len(keys), trace_keys, list(s.trace)))
             keys.append(node_key)
             pts.append(s.node)
@@ -164,12 +169,18 @@ def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> list:
     return [(np.array(k, np.int64), np.array(q)) for k, q in tris]
 
 
-def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray, splits: dict):
+def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,
+                      squares: np.ndarray, splits: dict):
     """Insert face nodes into the other side of every subdivided link.
 
-    The polygon across a shared face link traverses it as b -> a; it gets
-    the nodes in reverse order, so both sides share the same vertices and
-    the mesh has no T-junction.
+    The polygon across a shared face link traverses it as b -> a on the
+    same square; it gets the nodes in reverse order, so both sides share
+    the same vertices and the mesh has no T-junction.
+
+    Parameters
+    ----------
+    squares : (S,) int64
+        The square of the link leaving each polygon vertex (-1 where none).
     """
     if not splits:
         return offsets, keys, points
@@ -177,13 +188,13 @@ def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,
     poly = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
     nxt = np.arange(n) + 1
     nxt[offsets[1:] - 1] = offsets[:-1]
-    ends = np.array(sorted({b for _, b in splits}), dtype=np.int64)
-    cand = np.nonzero(np.isin(keys, ends))[0]
+    split_squares = np.array(sorted({q for q, _, _ in splits}), dtype=np.int64)
+    cand = np.nonzero(np.isin(squares, split_squares))[0]
     insert_after = {}
     for i in cand.tolist():
-        pair = (int(keys[nxt[i]]), int(keys[i]))  # other side: b -> a
-        if pair in splits:
-            insert_after[i] = splits[pair][::-1]
+        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))  # other side: b -> a
+        if link in splits:
+            insert_after[i] = splits[link][::-1]
     if not insert_after:
         return offsets, keys, points
     out_k, out_p, sizes = [], [], np.diff(offsets).copy()

@@ -237,6 +237,7 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
     keep = plain[owner]
     parts_keys = [events.key[ev[keep]]]
     parts_pts = [events.point[ev[keep]]]
+    parts_sq = [cycles.squares[keep]]
     parts_sizes = [sizes[plain]]
     apex = [np.zeros(plain.sum(), bool)]
     branches = {}
@@ -250,9 +251,11 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
         cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
         squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
         spokes = skeleton_links(surf, p, cyc_pts, squares, skeleton_directions(surf.hessian(p)))
-        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key)
+        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
+                                                 cycle_squares=cycles.squares[span])
         splits.update(split)
         for k, q in polys:
+            parts_sq.append(np.full(len(k), -1, np.int64))
             parts_keys.append(k)
             parts_pts.append(q)
             parts_sizes.append([len(k)])
@@ -260,8 +263,8 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
         branches[i] = branches.get(i, 0) + 1
     sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
-    offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys),
-                                           np.concatenate(parts_pts), splits)
+    offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
+                                           np.concatenate(parts_sq), splits)
     return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
 
 

@@ -267,7 +267,37 @@ class Surface:
             )
         return cache["hess"]
 
+    @property
+    def jet_coeffs(self) -> np.ndarray:
+        """F, its 3 first and 6 second derivatives stacked: (10, nx, ny, nz)."""
+        cache = self.__dict__.setdefault("_cache", {})
+        if "jet" not in cache:
+            h = self.hessian_coeffs
+            cache["jet"] = np.stack([self.coeffs, *self.gradient_coeffs,
+                                     h[0][0], h[0][1], h[0][2], h[1][1], h[1][2], h[2][2]])
+        return cache["jet"]
+
     # ------------------------------------------------------------ evaluation
+    def jet(self, points):
+        """F, grad F and the Hessian at ``points`` (..., 3) in one pass.
+
+        Returns
+        -------
+        f : (...), g : (..., 3), h : (..., 3, 3)
+        """
+        p = np.asarray(points, dtype=float)
+        shape = p.shape[:-1]
+        p = p.reshape(-1, 3)
+        c = self.jet_coeffs
+        _, nx, ny, nz = c.shape
+        t = np.einsum("ki,cijl->kcjl", _powers(p[:, 0], nx), c)
+        t = np.einsum("kcjl,kj->kcl", t, _powers(p[:, 1], ny))
+        v = np.einsum("kcl,kl->kc", t, _powers(p[:, 2], nz))
+        f = v[:, 0].reshape(shape)
+        g = v[:, 1:4].reshape(shape + (3,))
+        h = v[:, [4, 5, 6, 5, 7, 8, 6, 8, 9]].reshape(shape + (3, 3))
+        return f, g, h
+
     def __call__(self, points) -> np.ndarray:
         """F at ``points`` (..., 3)."""
         return evaluate_tensor(self.coeffs, points)

@@ -167,7 +167,7 @@ class SingularityType:
         """One readable line, e.g. ``A1-- (node) at (...): corank 0, ...``."""
         where = "(" + ", ".join(_num(c) for c in self.point) + ")"
         p, m, z = self.hessian_signature
-        sig = f"Hessian signature (+{p}, -{m}, 0x{z})"
+        sig = f"Hessian signature ({p}+, {m}-, {z} zero)"
         if not self.is_simple:
             line = f"non-simple at {where}: corank {self.corank}, {sig}, 3-jet {self.jet}"
             return line + (f"; {self.note}" if self.note else "")
@@ -210,7 +210,7 @@ def _nickname(t: SingularityType) -> str:
 
 
 # ----------------------------------------------------------------- classify
-def classify(surface, point: Sequence[float]) -> SingularityType:
+def classify(surface: "Surface | str", point: Sequence[float]) -> SingularityType:
     """Classify the singular point ``point`` of ``surface``.
 
     Parameters

@@ -61,9 +61,7 @@ def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, sq
     q = 0.5 * (0.5 * (a + b) + 0.5 * (lo + hi))
     q[axis] = a[axis]
     for _ in range(30):
-        f = surface(q)
-        g = surface.gradient(q)
-        h = surface.hessian(q)
+        f, g, h = surface.jet(q)
         gv = g @ v
         hv = h @ v
         jac = np.array([[g[u], g[w]], [hv[u], hv[w]]])
@@ -90,10 +88,14 @@ def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, sq
 def _correct(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: int = 20):
     """Gauss-Newton (minimum-norm steps) from q onto F = 0, grad F . v = 0."""
     for _ in range(iterations):
-        g = surface.gradient(q)
-        r = np.array([surface(q), g @ v])
-        j = np.stack([g, surface.hessian(q) @ v])
-        step = np.linalg.pinv(j, rcond=1e-12) @ r
+        f, g, h = surface.jet(q)
+        r = np.array([f, g @ v])
+        j = np.stack([g, h @ v])
+        # Minimum-norm step j^T (j j^T)^-1 r: a 2x2 solve, cheaper than pinv.
+        jj = j @ j.T
+        if abs(np.linalg.det(jj)) <= 1e-300:
+            break
+        step = j.T @ np.linalg.solve(jj, r)
         q = q - step
         if np.linalg.norm(step) < 1e-15 * (1 + np.linalg.norm(q)):
             break
@@ -115,8 +117,8 @@ def trace_to_point(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndar
     q = node.copy()
     points = []
     for k in range(pieces - 1):
-        g = surface.gradient(q)
-        tangent = np.cross(g, surface.hessian(q) @ v)
+        _, g, hess = surface.jet(q)
+        tangent = np.cross(g, hess @ v)
         norm = np.linalg.norm(tangent)
         if norm == 0:
             return None

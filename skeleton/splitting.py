@@ -27,7 +27,6 @@ from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
-from scipy import signal
 
 __all__ = [
     "degree_grid",
@@ -104,8 +103,12 @@ def mul(a: np.ndarray, b: np.ndarray, N: int, m: int | None = None) -> np.ndarra
     if a.ndim == 1:
         full = np.convolve(a, b)
     else:
-        # Direct (not FFT) convolution: FFT rounding is relative to the
-        # largest coefficient and would swamp the small high-order ones.
+        # General case (not used by the classifier's 1- and 2-variable
+        # series); scipy.signal is imported here because it is slow to load.
+        # Direct, not FFT: FFT rounding is relative to the largest
+        # coefficient and would swamp the small high-order ones.
+        from scipy import signal
+
         full = signal.convolve(a, b, method="direct")
     return truncate(full, N, m)
 

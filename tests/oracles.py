@@ -1,0 +1,50 @@
+"""Facts about singular points computed without singmesh.
+
+``branches_on_sphere`` counts the curves in which F = 0 meets a small
+sphere around a point: k disjoint closed curves cut the sphere into k + 1
+regions of constant sign, counted by connected-component labelling of the
+sign of F on a latitude-longitude grid (longitude periodic, each pole row
+one region).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+
+def branches_on_sphere(f, centre, radius, n_lat=720, n_lon=1440) -> int:
+    """Number of curves of F = 0 on the sphere |x - centre| = radius.
+
+    ``f`` is a vectorised function of (..., 3) points.  A definite F (no
+    curve) gives 0.
+    """
+    theta = (np.arange(n_lat) + 0.5) * np.pi / n_lat
+    phi = np.arange(n_lon) * 2 * np.pi / n_lon
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    pts = np.asarray(centre, float) + radius * np.stack(
+        [np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    sign = f(pts) > 0
+    regions = 0
+    for s in (sign, ~sign):
+        # Pad with the wrapped-around first column so labels join across 2 pi,
+        # and with pole rows that join each pole's cap.
+        grid = np.concatenate([s, s[:, :1]], axis=1)
+        lab, n = ndimage.label(grid)
+        parent = list(range(n + 1))
+
+        def find(a):
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            return a
+
+        for a, b in zip(lab[:, 0], lab[:, -1]):
+            if a and b:
+                parent[find(a)] = find(b)
+        for row in (lab[0], lab[-1]):
+            ids = [x for x in np.unique(row) if x]
+            for x in ids[1:]:
+                parent[find(x)] = find(ids[0])
+        regions += len({find(x) for x in range(1, n + 1)})
+    return regions - 1
