@@ -15,6 +15,7 @@ import numpy as np
 
 from singmesh import tolerances as tol
 
+from .flips import flip_slivers
 from .triangulate import triangulate_polygons
 
 
@@ -121,6 +122,7 @@ def assemble(
     # surface) has no area: its triangles go.  Elsewhere the template
     # search never picks a zero-area triangle when another exists.
     faces = faces[~_zero_area(vertices, faces)]
+    faces = flip_slivers(vertices, faces)
     # Drop vertices no triangle uses (collapsed infinitesimal features).
     used = np.zeros(len(vertices), bool)
     used[faces.ravel()] = True

@@ -7,5 +7,7 @@ __all__ = ["Surface", "SurfaceError"]
 
 from .api import mesh  # noqa: E402
 from .mesh import Mesh  # noqa: E402
+from singmesh.skeleton.classify import NotSingularError, SingularityType, classify  # noqa: E402
+from singmesh.skeleton.points import SingularPoint  # noqa: E402
 
-__all__ += ["mesh", "Mesh"]
+__all__ += ["mesh", "Mesh", "classify", "SingularityType", "NotSingularError", "SingularPoint"]

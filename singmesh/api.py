@@ -15,6 +15,7 @@ from singmesh.boxes.octree import star, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
+from singmesh.skeleton.classify import classify
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points
@@ -118,8 +119,12 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     singular = []
     for i, sp in enumerate(points):
         where = np.nonzero(vkeys == _point_key(i))[0]
+        try:
+            kind = classify(surf, sp.point)
+        except SurfaceError:
+            kind = None  # the classifier's own test of singularity disagreed
         singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
-                                branches=branches.get(i, 0)))
+                                branches=branches.get(i, 0), classification=kind))
     stats = {
         "leaves": len(tree.level),
         "non_simple_leaves": int((~tree.simple).sum()),

@@ -43,6 +43,10 @@ ROOT_CLUSTER = 1e-7
 #: is flat (its vertices are collinear to rounding): a collapsed feature.
 ZERO_AREA = 1e-12
 
+#: Triangles with doubled area below this times their longest edge squared
+#: are slivers: their longest edge is flipped where that helps.
+SLIVER_AREA = 1e-6
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8

@@ -23,8 +23,10 @@ class SingularPoint:
     signature : tuple[int, int, int]
         Positive, negative and zero eigenvalues of the Hessian.
     branches : int or None
-        Real branches meeting at the point (components of the surface on a
-        small sphere around it); 0 for an isolated real point.
+        Branches of the mesh meeting at the point: the link cycles fanned
+        into it (0 for an isolated real point).  The classification
+        carries the number the singularity type predicts; they agree when
+        the mesh is right.
     vertex : int or None
         Index of the mesh vertex placed at the point (None if no triangle
         reaches it, as for an isolated real point).
@@ -51,10 +53,15 @@ class SingularPoint:
     def describe(self) -> str:
         x, y, z = self.point
         parts = [f"({x:.10g}, {y:.10g}, {z:.10g})", self.name]
+        c = self.classification
+        if c is not None and getattr(c, "milnor", None):
+            parts.append(f"Milnor {c.milnor}")
         if self.branches is not None:
-            parts.append(f"{self.branches} branch{'es' if self.branches != 1 else ''}")
+            parts.append(f"{self.branches} branch{'es' if self.branches != 1 else ''} in the mesh")
         p, n, zr = self.signature
-        parts.append(f"Hessian rank {self.hessian_rank} signature (+{p}, -{n}, 0x{zr})")
+        parts.append(f"Hessian rank {self.hessian_rank} (+{p} -{n} 0x{zr})")
+        if self.vertex is None:
+            parts.append("no triangle reaches it")
         return "  ".join(parts)
 
     def __str__(self) -> str:
