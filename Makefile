@@ -23,7 +23,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_singular.py
 
 gallery: $(STAMP)
-	$(PY) gallery/generate.py --out gallery/out
+	$(PY) gallery/generate.py --out gallery/out --jobs 2
 
 clean:
 	rm -rf .venv out build *.egg-info

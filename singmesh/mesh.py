@@ -111,7 +111,24 @@ class Mesh:
         lines.append(f"singular points      {r['singular_points']}")
         for s in self.singularities:
             lines.append("  " + (s.describe() if hasattr(s, "describe") else str(s)))
+        lines += [f"note: {n}" for n in self.notes()]
         return "\n".join(lines)
+
+    def notes(self) -> list[str]:
+        """What the user must know about this mesh beyond the counts."""
+        out = []
+        if self.stats.get("singular_locus_not_isolated"):
+            out.append("F has a curve of singular points in the box (not isolated points); "
+                       "such curves are not meshed as singular (unsupported)")
+        if self.stats.get("overlapping_stars"):
+            out.append(f"{self.stats['overlapping_stars']} singular point(s) too close to another "
+                       "to be fanned separately")
+        if len(self.faces) == 0:
+            if self.singularities:
+                out.append("no triangle: in this box the real surface is only isolated point(s)")
+            else:
+                out.append("no triangle: F has no real zero in this box")
+        return out
 
     # ------------------------------------------------------------ export
     def to_meshio(self):

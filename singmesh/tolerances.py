@@ -101,6 +101,18 @@ SINGULAR_LOOSE = 1e-6
 #: A singular point is accepted with a relative residual below this.
 SINGULAR_RESIDUAL = 1e-12
 
+#: A point whose smallest Hessian eigenvalue is below this fraction of the
+#: largest is refined in multiple precision (possibly degenerate).
+SINGULAR_REFINE = 1e-3
+
+#: At most this many points are refined in multiple precision; more mean a
+#: curve of singular points (reported as not isolated).
+SINGULAR_MAX_REFINE = 64
+
+#: More candidate boxes than this per singular point found means a curve of
+#: singular points (an isolated point keeps at most a few dozen around it).
+CANDIDATES_PER_POINT = 64
+
 #: Singular points closer than this (relative to the box) are one point.
 SINGULAR_MERGE = 1e-7
 

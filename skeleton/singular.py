@@ -95,7 +95,8 @@ def hessian_signature(h: np.ndarray, scale: float) -> tuple[int, int, int]:
     return int((w > cut).sum()), int((w < -cut).sum()), int((np.abs(w) <= cut).sum())
 
 
-_STEP_FACTORS = (1, 2, 3, 4, 5, 6, 7, 8, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256)
+# Tried in this order; the search stops at the first group that improves.
+_STEP_GROUPS = ((1, 2, 3, 4, 5, 6, 7, 8), (0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256))
 
 
 class _MultiPrecision:
@@ -126,18 +127,23 @@ class _MultiPrecision:
                     break
                 # Pseudo-inverse step, ignoring directions the Hessian does
                 # not see at this precision.
-                cut = smax * mpmath.mpf(10) ** (-self.dps // 2)
+                # Near an A_k point the kernel eigenvalue is ~t^(k-1): keep it
+                # down to what the working precision can still resolve.
+                cut = smax * mpmath.mpf(10) ** (-(self.dps - 10))
                 coeff = [(u[:, i].T * g)[0] / s[i] if s[i] > cut else 0 for i in range(3)]
                 step = sum((v[i, :].T * coeff[i] for i in range(3)), mpmath.matrix(3, 1))
                 best, best_x, best_g = norm(g), None, None
                 # Along the kernel of an A_k point, grad F ~ t^k and the
                 # Newton step is t/k: try multiples of it; where the
                 # Jacobian is nearly singular it may overshoot: try halves.
-                for m in _STEP_FACTORS:
-                    xt = x - m * step
-                    gt = mpmath.matrix(self.grad(*xt))
-                    if norm(gt) < best:
-                        best, best_x, best_g = norm(gt), xt, gt
+                for group in _STEP_GROUPS:
+                    for m in group:
+                        xt = x - m * step
+                        gt = mpmath.matrix(self.grad(*xt))
+                        if norm(gt) < best:
+                            best, best_x, best_g = norm(gt), xt, gt
+                    if best_x is not None:
+                        break
                 if best_x is None:
                     break
                 moved = norm(best_x - x)
@@ -176,15 +182,34 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     # in double precision.  The multiple-precision pass decides.
     near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
     ok = inside & near_cell & np.isfinite(x).all(axis=1) & (residual(surface, x) < tol.SINGULAR_LOOSE)
+    # Double precision scatters the candidates of one degenerate point over
+    # about eps^(1/k): one representative per cluster of candidates within
+    # two candidate boxes (the best residual) is refined, not every one.
     x = x[ok]
-    x = _dedupe(x, tol.SINGULAR_MERGE * size.max())
+    x, spans = _dedupe(x, 2.0 * float(np.max(hi[0] - lo[0])), key=residual(surface, x), spans=True)
+    # A cluster spreading over many candidate boxes is a curve of singular
+    # points (cross-cap, Whitney umbrella): not meshed as a point.
+    curve = spans > 8.0 * float(np.max(hi[0] - lo[0]))
+    overflow = overflow or bool(curve.any())
+    x = x[~curve]
     hscale = max(max(np.abs(c).max() for row in surface.hessian_coeffs for c in row), 1e-300)
     mp = None
     out = []
+    refined = 0
     for p in x:
         h = surface.hessian(p)
         sig = hessian_signature(h, hscale)
-        if sig[2] > 0 or residual(surface, p) > tol.SINGULAR_RESIDUAL:
+        w = np.abs(np.linalg.eigvalsh(0.5 * (h + h.T)))
+        # Near-degenerate (or not yet converged) points go to multiple
+        # precision: at a point off by 1e-8 a degenerate Hessian can look
+        # regular at the rank tolerance.
+        if w.min() < tol.SINGULAR_REFINE * max(w.max(), 1e-300) or residual(surface, p) > tol.SINGULAR_RESIDUAL:
+            if refined >= tol.SINGULAR_MAX_REFINE:
+                # So many degenerate candidates are a curve of singular
+                # points, not isolated ones: stop, and say so.
+                overflow = True
+                continue
+            refined += 1
             mp = mp or _MultiPrecision(surface, tol.SINGULAR_DPS)
             p = mp.refine(p)
             h = surface.hessian(p)
@@ -195,6 +220,9 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
         if not np.all((p >= box[:, 0] - margin) & (p <= box[:, 1] + margin)):
             continue
         out.append(SingularPoint(point=p, residual=res, hessian_rank=3 - sig[2], signature=sig))
+    # An isolated point keeps a few candidate boxes around it; many more per
+    # point found means a curve of singular points the search collapsed.
+    overflow = overflow or len(lo) > tol.CANDIDATES_PER_POINT * max(len(out), 1)
     pts = _dedupe(np.array([s.point for s in out]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
     keep = []
     for q in pts:
@@ -203,20 +231,32 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     return keep, overflow
 
 
-def _dedupe(x: np.ndarray, radius: float) -> np.ndarray:
-    """One representative per cluster of points closer than ``radius``."""
-    if len(x) == 0:
-        return x.reshape(0, 3)
+def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: bool = False):
+    """One representative per cluster of points closer than ``radius``.
+
+    The representative is the member with the smallest ``key`` (default:
+    the one nearest the cluster's centre); the choice is deterministic.
+    With ``spans``, also return each cluster's extent (largest side of its
+    bounding box).
+    """
     from scipy.cluster.hierarchy import fcluster, linkage
 
-    if len(x) == 1:
-        return x
-    labels = fcluster(linkage(x, method="single"), t=radius, criterion="distance")
-    reps = []
+    if len(x) <= 1:
+        x = x.reshape(-1, 3)
+        return (x, np.zeros(len(x))) if spans else x
+    # linkage takes the (n, 3) observations; a 3x3 array of points only
+    # looks like a distance matrix to it, hence the explicit metric.
+    labels = fcluster(linkage(x, method="single", metric="euclidean"), t=radius, criterion="distance")
+    reps, extent = [], []
     for lab in np.unique(labels):
-        members = x[labels == lab]
-        # The member nearest the cluster's centre: deterministic.
+        sel = labels == lab
+        members = x[sel]
+        extent.append(np.ptp(members, axis=0).max())
+        if key is not None:
+            reps.append(members[np.lexsort((members[:, 2], members[:, 1], members[:, 0], key[sel]))[0]])
+            continue
         c = members.mean(axis=0)
         reps.append(members[np.argmin(np.linalg.norm(members - c, axis=1))])
     reps = np.array(reps)
-    return reps[np.lexsort(reps.T[::-1])]
+    order = np.lexsort(reps.T[::-1])
+    return (reps[order], np.array(extent)[order]) if spans else reps[order]

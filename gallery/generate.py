@@ -1,0 +1,218 @@
+"""Build the singmesh gallery: mesh every catalogue entry, picture it, write a static site.
+
+Usage::
+
+    python gallery/generate.py [--out DIR] [--only NAME ...] [--jobs N] [--size PX]
+                               [--catalogue PATH] [--coarse N] [--fine N] [--timeout SECONDS]
+                               [--strict] [--quiet]
+
+For each entry of ``catalogue.toml`` (or the entries whose names contain one
+of the ``--only`` substrings, case-insensitive) this meshes the surface,
+writes ``DIR/<slug>.ply``, ``.obj`` and ``.png``, and compares the singular
+points and Euler characteristic found with the catalogue.  Then it writes
+``DIR/index.html`` (thumbnail grid), ``DIR/<slug>.html`` (one page per
+entry), ``DIR/style.css`` and ``DIR/report.json``.  A failing entry is
+recorded with its error and does not stop the others.
+
+Exit status: 0 when the site was written (even if entries failed or differ
+from the catalogue; ``--strict`` makes failed entries exit 1), 2 for bad
+arguments or an unreadable catalogue.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import json
+import multiprocessing
+import platform
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any, Sequence
+
+HERE = Path(__file__).resolve().parent
+# The helper modules sit next to this script.  runpy (``singmesh gallery``)
+# does not put the script's folder on sys.path, and spawned worker processes
+# inherit sys.path from here, so both need this.
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+
+import gallery_lib  # noqa: E402
+from gallery_lib import CatalogueError, load_catalogue, run_entry, select  # noqa: E402
+
+DEFAULT_OUT = HERE / "out"
+
+
+def _power_of_two(text: str) -> int:
+    n = int(text)
+    if n < 1 or n & (n - 1):
+        raise argparse.ArgumentTypeError(f"{text} is not a power of two")
+    return n
+
+
+def _positive(text: str) -> int:
+    n = int(text)
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{text} is not a positive integer")
+    return n
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command-line interface (also used by ``singmesh gallery``)."""
+    p = argparse.ArgumentParser(
+        description="Mesh the gallery catalogue and write a static HTML gallery.")
+    p.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
+                   help=f"output folder (default {DEFAULT_OUT})")
+    p.add_argument("--only", nargs="+", metavar="NAME",
+                   help="only entries whose names contain one of these (case-insensitive)")
+    p.add_argument("--jobs", type=_positive, default=1, metavar="N",
+                   help="mesh entries in N processes (default 1)")
+    p.add_argument("--size", type=_positive, default=640, metavar="PX",
+                   help="picture width and height in pixels (default 640)")
+    p.add_argument("--catalogue", default=str(gallery_lib.DEFAULT_CATALOGUE), metavar="PATH",
+                   help="catalogue TOML file (default gallery/catalogue.toml)")
+    p.add_argument("--coarse", type=_power_of_two, metavar="N",
+                   help="override every entry's coarse resolution (quick previews)")
+    p.add_argument("--fine", type=_power_of_two, metavar="N",
+                   help="override every entry's fine resolution")
+    p.add_argument("--timeout", type=float, default=300.0, metavar="SECONDS",
+                   help="give an entry up after this long and record it as failed "
+                        "(default 300; 0: no limit; POSIX only)")
+    p.add_argument("--strict", action="store_true", help="exit 1 if any entry failed")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    return p
+
+
+def _failure(entry: gallery_lib.Entry, message: str) -> dict[str, Any]:
+    """The record of an entry whose worker process never returned a result."""
+    from dataclasses import asdict
+
+    return gallery_lib._clean({
+        **asdict(entry), "ok": False, "error": message, "traceback": None, "stage": "worker",
+        "time": None, "render_time": None, "report": None, "report_text": None,
+        "singularities": [], "files": {}, "warnings": [],
+        "comparison": {"types": None, "forms": None, "branches": None, "euler": None, "verdict": "error"},
+    })
+
+
+def run_all(entries: Sequence[gallery_lib.Entry], out: Path, *, jobs: int = 1, size: int = 640,
+            coarse: int | None = None, fine: int | None = None, timeout: float | None = None,
+            progress: bool = True) -> list[dict]:
+    """Run every entry, in parallel processes if ``jobs > 1``.
+
+    Returns
+    -------
+    list of dict
+        One record per entry, in the order of ``entries`` whatever order
+        the processes finish in.
+    """
+    from tqdm import tqdm
+
+    results: list[dict | None] = [None] * len(entries)
+    bar = tqdm(total=len(entries), desc="gallery", unit="surface", disable=not progress,
+               dynamic_ncols=True)
+    try:
+        if jobs <= 1 or len(entries) <= 1:
+            for i, e in enumerate(entries):
+                bar.set_postfix_str(e.name, refresh=False)
+                results[i] = run_entry(e, out, size, coarse, fine, timeout)
+                bar.update()
+        else:
+            # spawn: a clean interpreter per worker.  fork would copy the
+            # parent's threads (tqdm's monitor) and matplotlib state, which
+            # is unsafe; spawn also behaves the same on every platform.
+            ctx = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=min(jobs, len(entries)), mp_context=ctx) as pool:
+                futures = {pool.submit(run_entry, e, out, size, coarse, fine, timeout): i
+                           for i, e in enumerate(entries)}
+                for fut in as_completed(futures):
+                    i = futures[fut]
+                    try:
+                        results[i] = fut.result()
+                    except Exception as exc:  # the worker process died (crash, out of memory)
+                        results[i] = _failure(entries[i], f"{type(exc).__name__}: {exc}")
+                    bar.set_postfix_str(entries[i].name, refresh=False)
+                    bar.update()
+    finally:
+        bar.close()
+    return [r if r is not None else _failure(e, "not run") for r, e in zip(results, entries)]
+
+
+def _meta(jobs: int, total_time: float, catalogue: Path) -> dict[str, Any]:
+    try:
+        from importlib.metadata import version
+
+        sm_version = version("singmesh")
+    except Exception:  # not installed as a distribution: a source checkout
+        sm_version = "(source)"
+    return {
+        "generated": _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z").strip(),
+        "singmesh_version": sm_version,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "jobs": jobs,
+        "total_time": total_time,
+        "catalogue": str(catalogue),
+    }
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Build the gallery.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name; ``sys.argv[1:]`` if None.
+
+    Returns
+    -------
+    int
+        Exit status (see the module docstring).
+    """
+    args = build_parser().parse_args(None if argv is None else list(argv))
+    catalogue = Path(args.catalogue)
+    try:
+        groups, entries = load_catalogue(catalogue)
+    except CatalogueError as exc:
+        print(f"gallery: error: {exc}", file=sys.stderr)
+        return 2
+    chosen = select(entries, args.only)
+    if not chosen:
+        print(f"gallery: error: no catalogue entry matches {' '.join(args.only or [])!r}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"gallery: error: cannot create {out}: {exc}", file=sys.stderr)
+        return 2
+
+    t0 = time.perf_counter()
+    records = run_all(chosen, out, jobs=args.jobs, size=args.size, coarse=args.coarse,
+                      fine=args.fine, timeout=args.timeout, progress=not args.quiet)
+    total = time.perf_counter() - t0
+
+    from gallery_html import counts, write_site
+
+    meta = _meta(args.jobs, total, catalogue)
+    meta["selection"] = args.only or []
+    (out / "report.json").write_text(
+        json.dumps(gallery_lib._clean({"meta": meta, "entries": records}), indent=1, allow_nan=False),
+        encoding="utf-8")
+    index = write_site(out, records, groups, meta)
+
+    c = counts(records)
+    if not args.quiet:
+        print(f"{len(records)} surfaces in {total:.1f} s: {c['match']} match, {c['mismatch']} mismatch, "
+              f"{c['unsupported']} unsupported, {c['error']} failed")
+        for r in records:
+            if r.get("error"):
+                print(f"  failed: {r['name']}: {r['error']}")
+        print(f"open {index.resolve().as_uri()}")
+    return 1 if args.strict and c["error"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
