@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 
 import nodes
 import singmesh
-from common import best_time, box_size, format_table, marching_cubes, sci
+from common import best_time, box_size, format_table, marching_cubes, print_footer, sci
 
 
 def parse_args(argv=None):
@@ -110,14 +110,8 @@ def main(argv=None) -> int:
             ])
             print(f"  done {key} res {res}", file=sys.stderr, flush=True)
     print(format_table(columns, rows))
-    print()
-    print("mc = skimage.measure.marching_cubes on a (res+1)^3 grid, sampling included; "
-          "ratio = singmesh time / mc time.")
-    print("mc F = the part of mc's time spent sampling F with singmesh's Surface evaluator "
-          "(skimage's marching cubes is the rest).")
-    print("found = len(m.singular_points) / true nodes in the box; max err = largest distance "
-          "from a true node to the nearest reported singular point / box.")
-    print(f"One grid cell is 1/res of the box: {', '.join(sci(1 / r) for r in args.res)}.")
+    print_footer(args.res, ("found = len(m.singular_points) / true nodes in the box; max err = largest distance "
+                  "from a true node to the nearest reported singular point / box.",))
     return 0
 
 

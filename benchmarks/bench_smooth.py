@@ -23,7 +23,7 @@ from importlib.metadata import version
 import numpy as np
 
 import singmesh
-from common import best_time, format_table, marching_cubes, sci, surface_distance
+from common import best_time, format_table, marching_cubes, print_footer, sci, surface_distance
 
 #: (short name, equation, half-width of the cube box)
 SURFACES = [
@@ -83,12 +83,7 @@ def main(argv=None) -> int:
             ])
             print(f"  done {name} res {res}", file=sys.stderr, flush=True)
     print(format_table(columns, rows))
-    print()
-    print("mc = skimage.measure.marching_cubes on a (res+1)^3 grid, sampling included; "
-          "ratio = singmesh time / mc time.")
-    print("mc F = the part of mc's time spent sampling F with singmesh's Surface evaluator "
-          "(skimage's marching cubes is the rest).")
-    print(f"One grid cell is 1/res of the box: {', '.join(sci(1 / r) for r in args.res)}.")
+    print_footer(args.res, ())
     return 0
 
 

@@ -164,3 +164,15 @@ def format_table(columns, rows) -> str:
 def sci(value: float) -> str:
     """A distance or residual, 1.2e-03 style."""
     return f"{value:.1e}"
+
+
+def print_footer(res, notes=()):
+    """The explanation printed under both comparison tables."""
+    print()
+    print("mc = skimage.measure.marching_cubes on a (res+1)^3 grid, sampling included; "
+          "ratio = singmesh time / mc time.")
+    print("mc F = the part of mc's time spent sampling F with singmesh's Surface evaluator "
+          "(skimage's marching cubes is the rest).")
+    for line in notes:
+        print(line)
+    print(f"One grid cell is 1/res of the box: {', '.join(sci(1 / r) for r in res)}.")

@@ -304,8 +304,6 @@ def _cluster(line_of, pos, snap, lines, tree):
 
 def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events:
     """Turn root clusters into events using the signs of F between them."""
-    n = len(pos)
-    a = lines[line_of, 0]
     # Sign samples: half-way to the neighbouring root on the same line, or
     # half a cell beyond the outermost root.
     same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])

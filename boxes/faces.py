@@ -82,7 +82,10 @@ def contact_squares(tree: Octree):
     rows = np.concatenate(rows)
     owners = np.concatenate(owners)
     sides = np.concatenate(sides)
-    _, first = np.unique(rows, axis=0, return_index=True)
+    # One int64 per square (2 + 3 x 16 + 5 bits): a 1-D unique, not rows.
+    size_bits = np.log2(rows[:, 4]).astype(np.int64)
+    packed = (rows[:, 0] << 53) | (rows[:, 1] << 37) | (rows[:, 2] << 21) | (rows[:, 3] << 5) | size_bits
+    _, first = np.unique(packed, return_index=True)
     first = np.sort(first)
     return rows[first], owners[first], sides[first]
 
