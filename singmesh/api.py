@@ -94,6 +94,10 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
 
     t_sing = time.perf_counter()
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    kinds = [_classify(surf, sp.point) for sp in points]
+    # The classifier recognises a point on a curve of singular points
+    # (infinite Milnor number): such a locus is not meshed as points.
+    overflow = overflow or any(k is not None and "curve of singular points" in k.note for k in kinds)
     t_sing = time.perf_counter() - t_sing
     cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
     # First pass: the boxes at each singular point go to the fine level.
@@ -119,12 +123,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     singular = []
     for i, sp in enumerate(points):
         where = np.nonzero(vkeys == _point_key(i))[0]
-        try:
-            kind = classify(surf, sp.point)
-        except SurfaceError:
-            kind = None  # the classifier's own test of singularity disagreed
         singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
-                                branches=branches.get(i, 0), classification=kind))
+                                branches=branches.get(i, 0), classification=kinds[i]))
     stats = {
         "leaves": len(tree.level),
         "non_simple_leaves": int((~tree.simple).sum()),
@@ -211,6 +211,13 @@ def _stars(tree, cubes, points):
         group[inside] = n + i
         stars[n + i] = i
     return group, stars, clashes
+
+
+def _classify(surf, point):
+    try:
+        return classify(surf, point)
+    except SurfaceError:
+        return None  # the classifier's own test of singularity disagreed
 
 
 def _point_key(i: int) -> int:

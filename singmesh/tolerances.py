@@ -109,10 +109,6 @@ SINGULAR_REFINE = 1e-3
 #: curve of singular points (reported as not isolated).
 SINGULAR_MAX_REFINE = 64
 
-#: More candidate boxes than this per singular point found means a curve of
-#: singular points (an isolated point keeps at most a few dozen around it).
-CANDIDATES_PER_POINT = 64
-
 #: Singular points closer than this (relative to the box) are one point.
 SINGULAR_MERGE = 1e-7
 

@@ -174,6 +174,7 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     (lo, hi), overflow = candidate_boxes(surface, box, level)
     if len(lo) == 0:
         return [], overflow
+
     x = gauss_newton(surface, (lo + hi) / 2)
     size = box[:, 1] - box[:, 0]
     margin = 1e-9 * size
@@ -220,9 +221,6 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
         if not np.all((p >= box[:, 0] - margin) & (p <= box[:, 1] + margin)):
             continue
         out.append(SingularPoint(point=p, residual=res, hessian_rank=3 - sig[2], signature=sig))
-    # An isolated point keeps a few candidate boxes around it; many more per
-    # point found means a curve of singular points the search collapsed.
-    overflow = overflow or len(lo) > tol.CANDIDATES_PER_POINT * max(len(out), 1)
     pts = _dedupe(np.array([s.point for s in out]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
     keep = []
     for q in pts:
