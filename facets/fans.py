@@ -120,15 +120,23 @@ def _sectors(spokes, p_key, p, keys, pts):
 
 
 def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angle: float = 2.0) -> list:
-    """Add straight spokes to cycle vertices until no sector opens wider than
-    ``max_angle`` (radians) at p: a ring of triangles from p needs each
-    sector to turn less than half a revolution there."""
+    """Add straight spokes to cycle vertices: at least three spokes, and no
+    sector opening wider than ``max_angle`` (radians) at p, since a ring of
+    triangles from p needs each sector to turn less than half a revolution."""
     n = len(keys)
 
     def first_point(spoke):
         at, _, tpts = spoke
         return tpts[-1] if tpts else pts[at]
 
+    # Two spokes would bound both sectors: their zippers would join the
+    # same points twice.  Split the longest sector until there are three.
+    while len(spokes) < 3:
+        gaps = [((spokes[(k + 1) % len(spokes)][0] - sp[0]) % n or n, k) for k, sp in enumerate(spokes)]
+        steps, k = max(gaps)
+        if steps < 2:
+            break
+        spokes = spokes[: k + 1] + [((spokes[k][0] + steps // 2) % n, [], [])] + spokes[k + 1:]
     for _ in range(4 * n):
         out, changed = [], False
         for k, sp in enumerate(spokes):

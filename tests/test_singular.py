@@ -106,25 +106,15 @@ def test_expected_branches_agree_with_sphere_count(label, text):
 
 
 # ------------------------------------------------------------------ normal forms at the centre
-# E7 at the centre of the box: its thin branch lies along a lattice axis,
-# tangent to two split planes at once; the star's cycle there collapses.
-ORIGIN_XFAIL = {"E7++", "E7-+"}
-
-
 @pytest.mark.parametrize("label, text", CASES, ids=[c[0] for c in CASES])
 def test_normal_form_at_centre(label, text):
-    if label in ORIGIN_XFAIL:
-        pytest.xfail("E7 branch collapsed onto lattice lines at the box centre (known, see issue note)")
     m = singmesh.mesh(text, BOX1)
     check_singular_mesh(m, np.zeros(3), expected_branches(label), BOX1, numpy_f(Surface.parse(text).expr))
     assert len(m.singularities) == 1
 
 
 # ------------------------------------------------------------------ rotated and shifted
-ROTATED = [c for i, c in enumerate(CASES)]
-
-
-@pytest.mark.parametrize("label, text", ROTATED, ids=[c[0] for c in ROTATED])
+@pytest.mark.parametrize("label, text", CASES, ids=[c[0] for c in CASES])
 def test_normal_form_rotated_and_shifted(label, text):
     seed = sum(map(ord, label)) * 7 % 1000
     expr, shift = rotated(text, seed)
