@@ -20,7 +20,6 @@ This is a benchmark that prints figures, not a test.
 
 from __future__ import annotations
 
-import argparse
 import platform
 import sys
 import time
@@ -31,18 +30,7 @@ from scipy.spatial import cKDTree
 
 import nodes
 import singmesh
-from common import best_time, box_size, format_table, marching_cubes, print_footer, sci
-
-
-def parse_args(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--res", type=int, nargs="+", default=[32, 64],
-                   help="boxes per axis: singmesh's coarse, marching cubes' cells (default 32 64)")
-    p.add_argument("--repeat", type=int, default=3,
-                   help="timed runs after one warm-up; the best is shown (default 3)")
-    p.add_argument("--fine", type=int, default=256,
-                   help="singmesh's finest subdivision, at least --res (default 256)")
-    return p.parse_args(argv)
+from common import best_time, box_size, format_table, marching_cubes, parse_args, print_footer, sci
 
 
 def node_distances(true_nodes: np.ndarray, points: np.ndarray, box) -> tuple[float, float]:
@@ -58,7 +46,7 @@ def node_distances(true_nodes: np.ndarray, points: np.ndarray, box) -> tuple[flo
 
 
 def main(argv=None) -> int:
-    args = parse_args(argv)
+    args = parse_args(__doc__, argv)
     print(f"singmesh {version('singmesh')} | python {platform.python_version()} "
           f"| numpy {np.__version__} | best of {args.repeat} warm runs")
     print("true nodes (independent of singmesh):")

@@ -176,3 +176,17 @@ def print_footer(res, notes=()):
     for line in notes:
         print(line)
     print(f"One grid cell is 1/res of the box: {', '.join(sci(1 / r) for r in res)}.")
+
+
+def parse_args(description: str, argv=None):
+    """The options both comparison scripts take."""
+    import argparse
+
+    p = argparse.ArgumentParser(description=description.split("\n\n")[0])
+    p.add_argument("--res", type=int, nargs="+", default=[32, 64],
+                   help="boxes per axis: singmesh's coarse, marching cubes' cells (default 32 64)")
+    p.add_argument("--repeat", type=int, default=3,
+                   help="timed runs after one warm-up; the best is shown (default 3)")
+    p.add_argument("--fine", type=int, default=256,
+                   help="singmesh's finest subdivision, at least --res (default 256)")
+    return p.parse_args(argv)
