@@ -37,23 +37,28 @@ def clean_polygons(offsets: np.ndarray, ids: np.ndarray):
     ids, poly_of = ids[keep], poly_of[keep]
     counts = np.bincount(poly_of, minlength=n_poly)
     new_offsets = np.concatenate([[0], np.cumsum(counts)])
-    # Pinched polygons (a vertex twice, not consecutively): rare, cut in Python.
+    # Pinched polygons (a vertex twice, not consecutively): rare, cut in
+    # Python; all others pass through as arrays.
     order = np.lexsort((ids, poly_of))
     dup = (np.diff(poly_of[order]) == 0) & (np.diff(ids[order]) == 0)
-    pinched = set(poly_of[order][1:][dup].tolist())
-    out_ids, out_sizes, out_src = [], [], []
-    for p in range(n_poly):
-        seq = ids[new_offsets[p]:new_offsets[p + 1]]
-        pieces = _cut_pinched(list(seq)) if p in pinched else [seq]
-        for piece in pieces:
+    pinched = np.zeros(n_poly, bool)
+    pinched[poly_of[order][1:][dup]] = True
+    plain = ~pinched & (counts >= 3)
+    keep_entry = plain[poly_of]
+    sizes = [counts[plain]]
+    flat = [ids[keep_entry]]
+    src = [np.nonzero(plain)[0]]
+    for p in np.nonzero(pinched)[0].tolist():
+        for piece in _cut_pinched(list(ids[new_offsets[p]:new_offsets[p + 1]])):
             if len(piece) >= 3:
-                out_ids.append(np.asarray(piece, np.int64))
-                out_sizes.append(len(piece))
-                out_src.append(p)
-    if not out_ids:
+                sizes.append([len(piece)])
+                flat.append(np.asarray(piece, np.int64))
+                src.append([p])
+    sizes = np.concatenate([np.asarray(x, np.int64) for x in sizes])
+    if sizes.sum() == 0:
         return np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return (np.concatenate([[0], np.cumsum(out_sizes)]), np.concatenate(out_ids),
-            np.asarray(out_src, np.int64))
+    return (np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(flat),
+            np.concatenate([np.asarray(x, np.int64) for x in src]))
 
 
 def _zero_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

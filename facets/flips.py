@@ -43,9 +43,14 @@ def flip_slivers(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     slivers = np.nonzero(area2 <= tol.SLIVER_AREA * longest)[0]
     if len(slivers) == 0:
         return faces
-    # Directed edge -> triangle, for the triangles across the slivers' edges.
+    # Directed edge -> triangle, only for the triangles touching a sliver's
+    # vertices (the triangle across an edge and any edge a flip could meet
+    # are among them): no Python loop over the whole mesh.
+    near_verts = np.unique(faces[slivers])
+    near = np.unique(np.nonzero(np.isin(faces, near_verts).any(axis=1))[0])
     edge_of = {}
-    for t, (a, b, c) in enumerate(faces.tolist()):
+    for t in near.tolist():
+        a, b, c = faces[t].tolist()
         edge_of[(a, b)] = t
         edge_of[(b, c)] = t
         edge_of[(c, a)] = t
