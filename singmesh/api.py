@@ -18,7 +18,7 @@ from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.skeleton.classify import classify
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
-from singmesh.skeleton.singular import singular_points
+from singmesh.skeleton.singular import singular_points, skeleton_nodes
 
 from . import tolerances as tol
 from .errors import SurfaceError
@@ -120,6 +120,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=lambda q: project_to_surface(surf, q), apex=apex)
+    # Where two axis skeletons meet (normal along an axis), for reference.
+    nodes, node_axes = skeleton_nodes(surf, b, level=min(fine_level, tol.SKELETON_NODE_LEVEL))
     singular = []
     for i, sp in enumerate(points):
         where = np.nonzero(vkeys == _point_key(i))[0]
@@ -139,7 +141,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "overlapping_stars": clashes,
         "time": time.perf_counter() - t0,
     }
-    return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats)
+    return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
+                skeleton_nodes=nodes, skeleton_node_axes=node_axes)
 
 
 def _star_cubes(tree, links, points) -> np.ndarray:

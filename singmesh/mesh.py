@@ -37,6 +37,11 @@ class Mesh:
     box : (3, 2) float64
     stats : dict
         How the mesher got there (boxes, levels, timings).
+    skeleton_nodes : (j, 3) float64
+        Points where F and two partial derivatives vanish but grad F does
+        not: where the x-, y- and z-skeletons meet (isolated ones only).
+    skeleton_node_axes : (j, 2) int64
+        The two derivatives vanishing at each skeleton node.
     """
 
     vertices: np.ndarray
@@ -46,6 +51,8 @@ class Mesh:
     normals: np.ndarray = None
     singularities: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
+    skeleton_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    skeleton_node_axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
 
     def __post_init__(self):
         if self.normals is None:

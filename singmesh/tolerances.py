@@ -116,6 +116,9 @@ SINGULAR_MERGE = 1e-7
 #: at most the fine level.
 SINGULAR_LEVEL = 8
 
+#: Depth of the search for skeleton nodes (F and two derivatives zero).
+SKELETON_NODE_LEVEL = 6
+
 #: Working digits of the multiple-precision refinement of degenerate points.
 SINGULAR_DPS = 60
 

@@ -26,8 +26,8 @@ from singmesh.surface import VARIABLES, Surface
 from .points import SingularPoint
 
 
-def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: int = 4096):
-    """Boxes at ``level`` on which F, Fx, Fy, Fz may all vanish.
+def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: int = 4096, polys=None):
+    """Boxes at ``level`` on which F, Fx, Fy, Fz (or ``polys``) may all vanish.
 
     Returns
     -------
@@ -36,7 +36,8 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: in
         True when the candidates grew past ``max_boxes`` (a curve of
         singular points, not isolated ones); the search stopped there.
     """
-    polys = [surface.coeffs, *surface.gradient_coeffs]
+    if polys is None:
+        polys = [surface.coeffs, *surface.gradient_coeffs]
     stacks = [bernstein_on_box(p, box)[None] for p in polys]
     corner = np.zeros((1, 3), np.int64)
     for lvl in range(level + 1):
@@ -258,3 +259,52 @@ def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: 
     reps = np.array(reps)
     order = np.lexsort(reps.T[::-1])
     return (reps[order], np.array(extent)[order]) if spans else reps[order]
+
+
+def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    """Points where F and two partial derivatives vanish but grad F does not.
+
+    There the x-, y- or z-skeleton curves V(F, F_a), V(F, F_b) meet: the
+    surface normal is along the third axis.  Found like singular points:
+    Bernstein candidates for (F, F_a, F_b), then Newton on that square
+    system from every candidate at once.
+
+    Returns
+    -------
+    points : (k, 3) ndarray, sorted
+    axes : (k, 2) int64, the pair (a, b) of vanishing derivatives
+    """
+    box = np.asarray(box, dtype=float)
+    grads = surface.gradient_coeffs
+    size = box[:, 1] - box[:, 0]
+    found, pairs = [], []
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        (lo, hi), overflow = candidate_boxes(surface, box, level, polys=[surface.coeffs, grads[a], grads[b]])
+        if overflow or len(lo) == 0:
+            continue  # a whole curve of them (e.g. a surface of revolution): not points
+        x = (lo + hi) / 2
+        for _ in range(30):
+            f, g, h = surface.jet(x)
+            r = np.stack([f, g[:, a], g[:, b]], axis=1)
+            j = np.stack([g, h[:, a], h[:, b]], axis=1)
+            ok = np.abs(np.linalg.det(j)) > 1e-300
+            step = np.zeros_like(x)
+            step[ok] = np.linalg.solve(j[ok], r[ok][..., None])[..., 0]
+            x = x - step
+        f, g, _ = surface.jet(x)
+        scale = np.maximum(surface.magnitude(x), 1e-300)
+        gn = np.linalg.norm(g, axis=1)
+        good = (np.isfinite(x).all(axis=1)
+                & np.all((x >= box[:, 0] - 1e-9 * size) & (x <= box[:, 1] + 1e-9 * size), axis=1)
+                & (np.abs(f) <= 1e-12 * scale) & (np.abs(g[:, a]) <= 1e-10 * gn) & (np.abs(g[:, b]) <= 1e-10 * gn)
+                & (gn > tol.SINGULAR_LOOSE * np.abs(surface.coeffs).max()))
+        # Newton from boxes along a curve of such points (Cayley's cubic has
+        # lines of them) lands all along it: clusters that long are curves.
+        step = float(np.max(hi[0] - lo[0]))
+        reps, extent = _dedupe(x[good], 2.0 * step, spans=True)
+        pts = _dedupe(reps[extent <= 8.0 * step], tol.SINGULAR_MERGE * size.max())
+        found.append(pts)
+        pairs.append(np.tile([a, b], (len(pts), 1)))
+    if not found:
+        return np.zeros((0, 3)), np.zeros((0, 2), np.int64)
+    return np.concatenate(found), np.concatenate(pairs).astype(np.int64)

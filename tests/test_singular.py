@@ -206,3 +206,26 @@ def test_classification_reported():
     m = singmesh.mesh("y x^2 - y^3 - z^2", BOX1)
     (s,) = m.singularities
     assert s.classification.name == "D4" and s.classification.branches == 3 == s.branches
+
+
+def test_skeleton_nodes_of_the_sphere():
+    # F = Fx = Fy = 0 at the poles, and likewise for the other axis pairs.
+    m = singmesh.mesh("x^2 + y^2 + z^2 - 1", coarse=8)
+    pts = m.skeleton_nodes[np.lexsort(m.skeleton_nodes.T)]
+    expected = np.array([[0, 0, -1], [0, -1, 0], [-1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    expected = expected[np.lexsort(expected.T)]
+    assert np.allclose(pts, expected, atol=1e-12)
+
+
+def test_skeleton_nodes_against_sympy():
+    # A tilted ellipsoid: solve F = Fx = Fy = 0 exactly and compare.
+    text = "x^2 + 2 y^2 + 3 z^2 + x y - y z - 1"
+    expr = Surface.parse(text).expr
+    sols = sympy.solve([expr, sympy.diff(expr, X), sympy.diff(expr, Y)], [X, Y, Z], dict=True)
+    truth = np.array([[complex(s[v]).real for v in (X, Y, Z)] for s in sols
+                      if all(abs(complex(s[v]).imag) < 1e-12 for v in (X, Y, Z))])
+    m = singmesh.mesh(text, coarse=8)
+    got = m.skeleton_nodes[(m.skeleton_node_axes == [0, 1]).all(axis=1)]
+    assert len(got) == len(truth) == 2
+    for p in truth:
+        assert np.abs(got - p).max(axis=1).min() <= 1e-10
