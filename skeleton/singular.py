@@ -283,14 +283,21 @@ def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, n
         if overflow or len(lo) == 0:
             continue  # a whole curve of them (e.g. a surface of revolution): not points
         x = (lo + hi) / 2
+        live = np.ones(len(x), bool)
         for _ in range(30):
-            f, g, h = surface.jet(x)
+            f, g, h = surface.jet(x[live])
             r = np.stack([f, g[:, a], g[:, b]], axis=1)
             j = np.stack([g, h[:, a], h[:, b]], axis=1)
-            ok = np.abs(np.linalg.det(j)) > 1e-300
-            step = np.zeros_like(x)
+            with np.errstate(over="ignore", invalid="ignore"):
+                ok = np.abs(np.linalg.det(j)) > 1e-300
+            step = np.zeros((live.sum(), 3))
             step[ok] = np.linalg.solve(j[ok], r[ok][..., None])[..., 0]
-            x = x - step
+            x[live] = x[live] - step
+            # Starts that run off the box are dropped, not followed to overflow.
+            live &= np.all(np.abs(x - box.mean(axis=1)) <= size, axis=1)
+            if not live.any():
+                break
+        x = x[live]
         f, g, _ = surface.jet(x)
         scale = np.maximum(surface.magnitude(x), 1e-300)
         gn = np.linalg.norm(g, axis=1)
