@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 import nodes
 import singmesh
-from common import best_time, box_size, format_table, marching_cubes, parse_args, print_footer, sci
+from common import TIME_COLUMNS, best_time, box_size, format_table, marching_cubes, parse_args, print_footer, sci
 
 
 def node_distances(true_nodes: np.ndarray, points: np.ndarray, box) -> tuple[float, float]:
@@ -67,11 +67,7 @@ def main(argv=None) -> int:
         found[key] = (s, surf, n)
     print()
 
-    columns = [
-        ("", "surface", "<"), ("", "res", ">"),
-        ("time [s]", "singmesh", ">"), ("time [s]", "mc", ">"), ("time [s]", "mc F", ">"),
-        ("time [s]", "ratio", ">"),
-        ("vertices", "singmesh", ">"), ("vertices", "mc", ">"),
+    columns = TIME_COLUMNS + [
         ("singular points", "found", ">"), ("singular points", "max err", ">"),
         ("node->vertex max / box", "singmesh", ">"), ("node->vertex max / box", "mc", ">"),
         ("node->vertex median / box", "singmesh", ">"), ("node->vertex median / box", "mc", ">"),

@@ -22,7 +22,7 @@ from importlib.metadata import version
 import numpy as np
 
 import singmesh
-from common import best_time, format_table, marching_cubes, parse_args, print_footer, sci, surface_distance
+from common import TIME_COLUMNS, best_time, format_table, marching_cubes, parse_args, print_footer, sci, surface_distance
 
 #: (short name, equation, half-width of the cube box)
 SURFACES = [
@@ -41,11 +41,7 @@ def main(argv=None) -> int:
         print(f"  {name:11s} {eq}  on [{-h:g},{h:g}]^3")
     print()
 
-    columns = [
-        ("", "surface", "<"), ("", "res", ">"),
-        ("time [s]", "singmesh", ">"), ("time [s]", "mc", ">"), ("time [s]", "mc F", ">"),
-        ("time [s]", "ratio", ">"),
-        ("vertices", "singmesh", ">"), ("vertices", "mc", ">"),
+    columns = TIME_COLUMNS + [
         ("faces", "singmesh", ">"), ("faces", "mc", ">"),
         ("max |F|/|grad F| / box", "singmesh", ">"), ("max |F|/|grad F| / box", "mc", ">"),
     ]

@@ -190,3 +190,12 @@ def parse_args(description: str, argv=None):
     p.add_argument("--fine", type=int, default=256,
                    help="singmesh's finest subdivision, at least --res (default 256)")
     return p.parse_args(argv)
+
+
+#: The columns both comparison tables start with: (group, name, alignment).
+TIME_COLUMNS = [
+    ("", "surface", "<"), ("", "res", ">"),
+    ("time [s]", "singmesh", ">"), ("time [s]", "mc", ">"), ("time [s]", "mc F", ">"),
+    ("time [s]", "ratio", ">"),
+    ("vertices", "singmesh", ">"), ("vertices", "mc", ">"),
+]

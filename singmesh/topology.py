@@ -36,11 +36,6 @@ def triangle_angles(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out
 
 
-def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    p = vertices[faces]
-    return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-
-
 def on_box_boundary(points: np.ndarray, box: np.ndarray, rel: float = 1e-12) -> np.ndarray:
     """Whether points lie on a face of the box (to ``rel`` of its size)."""
     scale = rel * (box[:, 1] - box[:, 0])

@@ -165,3 +165,26 @@ def test_write_unknown_format(tmp_path):
     m = singmesh.mesh("x^2+y^2+z^2-1", coarse=8)
     with pytest.raises(ValueError, match="unknown mesh format"):
         m.write(tmp_path / "a.xyz")
+
+
+def test_box_graph_is_a_union_of_cycles():
+    # The networkx graph of a box's links: every crossing has one link in
+    # and one out, and its cycles are the facets the mesher triangulated.
+    import networkx as nx
+
+    from singmesh.boxes.edges import compute_events
+    from singmesh.boxes.faces import face_links
+    from singmesh.boxes.octree import subdivide
+    from singmesh.facets.cycles import box_graph, box_links, find_cycles
+
+    s = singmesh.Surface.parse("(x^2+y^2+z^2+0.64-0.09)^2-2.56(x^2+y^2)")
+    tree = subdivide(s.coeffs, np.array(B2, float), 3, 6)
+    events = compute_events(s, tree)
+    links = box_links(face_links(tree, events))
+    cycles = find_cycles(*links, n_events=len(events.key))
+    for box in np.unique(links[0])[:50]:
+        g = box_graph(links, int(box))
+        assert all(d == 1 for _, d in g.in_degree()) and all(d == 1 for _, d in g.out_degree())
+        expected = sorted(sorted(cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]].tolist())
+                          for c in np.nonzero(cycles.box == box)[0])
+        assert sorted(sorted(c) for c in nx.simple_cycles(g)) == expected
