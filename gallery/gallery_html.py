@@ -23,6 +23,8 @@ VERDICTS = {
     "match": ("\u2713 match", "ok"),
     "mismatch": ("\u2717 mismatch", "bad"),
     "unsupported": ("\u29b8 unsupported", "warn"),
+    "meshed": ("\u25cb meshed, nothing to compare", "na"),
+    "unread": ("\u2298 does not read", "warn"),
     "error": ("\u26a0 error", "err"),
 }
 
@@ -74,6 +76,10 @@ section.group > p.gdesc { margin: 0 0 12px; color: var(--muted); max-width: 920p
 .badge.bad { color: var(--bad); background: var(--bad-bg); }
 .badge.warn { color: var(--warn); background: var(--warn-bg); }
 .badge.err { color: var(--err); background: var(--err-bg); }
+.badge.na { color: var(--muted); background: var(--code-bg); }
+ul.unread { margin: 12px 0 0; padding-left: 20px; color: var(--muted); font-size: 14px; }
+ul.unread b { color: var(--ink); }
+code.eq { white-space: pre-wrap; }
 code.eq { display: block; background: var(--code-bg); border-radius: 6px; padding: 5px 8px; font-size: 12.5px;
   overflow-wrap: anywhere; max-height: 5.6em; overflow: auto; }
 .desc { color: var(--muted); font-size: 13.5px; margin: 0; }
@@ -108,11 +114,11 @@ document.querySelectorAll('.toolbar button').forEach(function (b) {
     document.querySelectorAll('.toolbar button').forEach(function (o) { o.classList.remove('on'); });
     b.classList.add('on');
     var v = b.dataset.show;
-    document.querySelectorAll('.card').forEach(function (c) {
+    document.querySelectorAll('.card, ul.unread li').forEach(function (c) {
       c.style.display = (v === 'all' || c.dataset.verdict === v) ? '' : 'none';
     });
     document.querySelectorAll('section.group').forEach(function (s) {
-      var any = Array.prototype.some.call(s.querySelectorAll('.card'), function (c) { return c.style.display !== 'none'; });
+      var any = Array.prototype.some.call(s.querySelectorAll('.card, ul.unread li'), function (c) { return c.style.display !== 'none'; });
       s.style.display = any ? '' : 'none';
     });
   });
@@ -134,7 +140,9 @@ def _mark(ok: bool | None) -> str:
 
 
 def verdict_of(rec: dict) -> str:
-    """The entry's verdict, "error" when it failed."""
+    """The entry's verdict, "unread" when its equation does not read, "error" when it failed."""
+    if rec.get("unread"):
+        return "unread"
     if rec.get("error"):
         return "error"
     return (rec.get("comparison") or {}).get("verdict") or "error"
@@ -158,6 +166,9 @@ def _fmt_time(t: float | None) -> str:
 def singular_summary(rec: dict) -> tuple[str, str]:
     """(count line, types line) for a card: found / expected with a mark."""
     found = [s.get("name") or "?" for s in rec.get("singularities") or []]
+    if rec.get("expected") is None:  # an entry of a .defs file: nothing known
+        count = "\u2014" if rec.get("report") is None else f"{len(found)} found"
+        return count, f"found {esc(type_summary(found))}"
     expected = rec.get("expected") or []
     comp = rec.get("comparison") or {}
     if rec.get("report") is None:
@@ -268,17 +279,22 @@ def index_page(records: Sequence[dict], groups: Sequence[Group], meta: dict) -> 
         recs = by_group.get(g.id)
         if not recs:
             continue
-        cards = "\n".join(card(r) for r in recs)
+        cards = "\n".join(card(r) for r in recs if not r.get("unread"))
+        # Definitions that do not read: one line each, with the reason.
+        unread = "".join(f'<li data-verdict="unread"><b>{esc(r["name"])}</b>: <span class="mono">'
+                         f'{esc(r["unread"])}</span></li>' for r in recs if r.get("unread"))
         sections.append(f"""<section class="group" id="group-{esc(g.id)}">
 <h2>{esc(g.title)}</h2>
 <p class="gdesc">{esc(g.description)}</p>
 <div class="grid">
 {cards}
 </div>
+{f'<ul class="unread">{unread}</ul>' if unread else ''}
 </section>""")
     buttons = "".join(
         f'<button type="button" data-show="{k}"{" class=on" if k == "all" else ""}>{esc(label)}</button>'
-        for k, label in [("all", f"all {len(records)}")] + [(k, f"{VERDICTS[k][0]} {c[k]}") for k in VERDICTS])
+        for k, label in [("all", f"all {len(records)}")] + [(k, f"{VERDICTS[k][0]} {c[k]}") for k in VERDICTS
+                                                            if c[k] or k in ("match", "error")])
     body = f"""<header class="top">
 <h1>singmesh gallery</h1>
 <p>Real algebraic surfaces F(x, y, z) = 0 meshed by singmesh {esc(meta.get("singmesh_version"))}:
@@ -287,10 +303,7 @@ singular points found against what is known, Euler characteristic, and the meshe
 ({esc(meta.get("jobs"))} process{"es" if meta.get("jobs", 1) != 1 else ""}) \u00b7 <a href="report.json">report.json</a></p>
 <div class="stats">
 <span>{len(records)} surfaces</span>
-<span>{esc(VERDICTS["match"][0])} {c["match"]}</span>
-<span>{esc(VERDICTS["mismatch"][0])} {c["mismatch"]}</span>
-<span>{esc(VERDICTS["unsupported"][0])} {c["unsupported"]}</span>
-<span>{esc(VERDICTS["error"][0])} {c["error"]}</span>
+{"".join(f'<span>{esc(VERDICTS[k][0])} {c[k]}</span>' for k in VERDICTS if c[k] or k in ("match", "error"))}
 </div>
 </header>
 <main>
@@ -299,7 +312,7 @@ singular points found against what is known, Euler characteristic, and the meshe
 (red A, purple D, green E, black other) \u00b7 \u2713 as expected, \u2717 differs, \u2014 not known</span></div>
 {chr(10).join(sections)}
 </main>
-<footer>Generated by gallery/generate.py from gallery/catalogue.toml.</footer>
+<footer>Generated by gallery/generate.py from {esc(Path(meta.get("catalogue") or "gallery/catalogue.toml").name)}.</footer>
 <script>
 {FILTER_JS}</script>"""
     return _page("singmesh gallery", body)

@@ -32,6 +32,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 DEFAULT_CATALOGUE = HERE / "catalogue.toml"
 STATUSES = ("supported", "unsupported")
+#: Used where a .defs file gives no box.
+DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
 
 #: The leading ADE type of a classification name: "A1--" -> "A1", "E_6" -> "E6".
 _ADE = re.compile(r"^([ADE])_?(\d+)")
@@ -94,7 +96,7 @@ class Entry:
     equation: str
     box: tuple[tuple[float, float], ...]
     description: str
-    expected: tuple[str, ...]
+    expected: tuple[str, ...] | None  # None: nothing known to compare with (a .defs file)
     status: str
     reason: str = ""
     params: dict[str, Any] = field(default_factory=dict)
@@ -105,10 +107,20 @@ class Entry:
     coarse: int = 32
     fine: int = 256
     timeout: float | None = None
+    defs: str = ""  # the SingSurf .defs file and the index of the definition in it, if from one
+    defs_index: int = -1
 
     @property
     def supported(self) -> bool:
         return self.status == "supported"
+
+    def surface(self):
+        """The surface to mesh: read from its .defs file (errors placed in it) or from ``equation``."""
+        import singmesh
+
+        if self.defs:
+            return singmesh.read_definitions(self.defs)[self.defs_index].surface(**self.params)
+        return singmesh.Surface.parse(self.equation, **self.params)
 
 
 def slugify(name: str) -> str:
@@ -228,6 +240,54 @@ def load_catalogue(path: str | Path = DEFAULT_CATALOGUE) -> tuple[list[Group], l
     return groups, entries
 
 
+def load_definitions(path: str | Path) -> tuple[list[Group], list[Entry]]:
+    """A SingSurf ``.defs`` file as a catalogue: one entry per definition.
+
+    Groups follow the file's ``<group>`` nesting ("Cubics / Class II ...").
+    Nothing is known to compare with, so entries have ``expected=None``.
+    A definition that does not read (or is not an implicit surface) keeps
+    its entry; :func:`run_entry` records the reason as ``unread``.
+
+    Raises
+    ------
+    CatalogueError
+        If the file cannot be read or is malformed.
+    """
+    import singmesh
+
+    try:
+        definitions = singmesh.read_definitions(path)
+    except singmesh.SurfaceError as exc:
+        raise CatalogueError(str(exc)) from None
+    groups: list[Group] = []
+    by_path: dict[tuple, str] = {}
+    entries: list[Entry] = []
+    names, slugs = set(), set()
+    for i, d in enumerate(definitions):
+        if d.group not in by_path:
+            title = " / ".join(d.group) or "(no group)"
+            gid = slugify(title) or "ungrouped"
+            while gid in {g.id for g in groups}:
+                gid += "-"
+            by_path[d.group] = gid
+            groups.append(Group(id=gid, title=title, description=f"from {Path(path).name}"))
+        name, k = d.name, 2
+        while name in names:  # the files repeat some names
+            name, k = f"{d.name} ({k})", k + 1
+        names.add(name)
+        slug = base = slugify(name)
+        k = 2
+        while slug in slugs:
+            slug, k = f"{base}-{k}", k + 1
+        slugs.add(slug)
+        entries.append(Entry(
+            name=name, slug=slug, group=by_path[d.group], equation=d.equation,
+            box=d.box or DEFAULT_BOX, description=d.description or d.where, expected=None,
+            status="supported", params=dict(d.parameters), notes=d.where + ("" if d.box else "; no box in the file: the default box"),
+            defs=str(path), defs_index=i))
+    return groups, entries
+
+
 def select(entries: Sequence[Entry], only: Iterable[str] | None) -> list[Entry]:
     """Entries whose name contains any of ``only`` (case-insensitive); all if none given."""
     only = [o.lower() for o in (only or []) if o]
@@ -258,8 +318,13 @@ def compare(entry: Entry, found_names: Sequence[str], euler: int | None,
         None when either side does not give them; ``euler``
         (bool or None): None when the catalogue gives no value;
         ``verdict``: "match" or "mismatch" for supported entries,
-        "unsupported" otherwise.
+        "unsupported" otherwise, "meshed" when nothing is expected (an entry
+        of a .defs file).
     """
+    if entry.expected is None:
+        return {"types": None, "forms": None, "branches": None, "euler": None,
+                "verdict": "meshed" if entry.supported else "unsupported"}
+
     def key(token: str, exact: bool) -> str:
         return token if exact else (ade_type(token) or token)
 
@@ -363,7 +428,7 @@ def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
     out = Path(out_dir)
     record: dict[str, Any] = {
         **{k: v for k, v in asdict(entry).items()},
-        "ok": False, "error": None, "traceback": None, "stage": "mesh",
+        "ok": False, "error": None, "unread": None, "traceback": None, "stage": "mesh",
         "time": None, "render_time": None, "report": None, "report_text": None,
         "singularities": [], "comparison": None, "files": {}, "warnings": [],
     }
@@ -387,9 +452,17 @@ def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
 
 
 def _record_error(record: dict[str, Any], exc: BaseException) -> None:
-    """Put an exception (message, traceback, verdict "error") into an entry's record."""
+    """Put an exception (message, traceback, verdict "error") into an entry's record.
+
+    An equation that does not read is the entry's input, not a failure of
+    the mesher: its record gets ``unread`` with the reason, and no traceback.
+    """
+    import singmesh
+
+    if record["stage"] == "read" and isinstance(exc, singmesh.SurfaceError):
+        record["unread"] = str(exc)
     record["error"] = f"{type(exc).__name__}: {exc}"
-    record["traceback"] = traceback.format_exc()
+    record["traceback"] = None if record.get("unread") else traceback.format_exc()
     if record["comparison"] is None:
         record["comparison"] = {"types": None, "forms": None, "branches": None, "euler": None,
                                 "verdict": "error"}
@@ -403,10 +476,12 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
     import singmesh
     from gallery_render import render_png
 
+    # A definition of a .defs file that does not read is the file's, not a failure.
+    record["stage"] = "read" if entry.defs else "mesh"
+    surface = entry.surface()
     record["stage"] = "mesh"
     t0 = time.perf_counter()
-    m = singmesh.mesh(entry.equation, box=entry.box, coarse=coarse or entry.coarse,
-                      fine=fine or entry.fine, **entry.params)
+    m = singmesh.mesh(surface, box=entry.box, coarse=coarse or entry.coarse, fine=fine or entry.fine)
     record["time"] = float(m.stats.get("time", time.perf_counter() - t0))
     record["stage"] = "report"
     report = m.report()

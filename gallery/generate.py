@@ -3,7 +3,7 @@
 Usage::
 
     python gallery/generate.py [--out DIR] [--only NAME ...] [--jobs N] [--size PX]
-                               [--catalogue PATH] [--coarse N] [--fine N] [--timeout SECONDS]
+                               [--catalogue PATH | --defs FILE] [--coarse N] [--fine N] [--timeout SECONDS]
                                [--strict] [--quiet]
 
 For each entry of ``catalogue.toml`` (or the entries whose names contain one
@@ -13,6 +13,11 @@ points and Euler characteristic found with the catalogue.  Then it writes
 ``DIR/index.html`` (thumbnail grid), ``DIR/<slug>.html`` (one page per
 entry), ``DIR/style.css`` and ``DIR/report.json``.  A failing entry is
 recorded with its error and does not stop the others.
+
+With ``--defs FILE`` a SingSurf definition file is the catalogue: one page
+per definition, grouped as the file groups them, each on its own box with
+its parameters; a definition that does not read gets its line in the index
+with the reason.
 
 Exit status: 0 when the site was written (even if entries failed or differ
 from the catalogue; ``--strict`` makes failed entries exit 1), 2 for bad
@@ -40,7 +45,7 @@ if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 
 import gallery_lib  # noqa: E402
-from gallery_lib import CatalogueError, load_catalogue, run_entry, select  # noqa: E402
+from gallery_lib import CatalogueError, load_catalogue, load_definitions, run_entry, select  # noqa: E402
 
 DEFAULT_OUT = HERE / "out"
 
@@ -73,6 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="picture width and height in pixels (default 640)")
     p.add_argument("--catalogue", default=str(gallery_lib.DEFAULT_CATALOGUE), metavar="PATH",
                    help="catalogue TOML file (default gallery/catalogue.toml)")
+    p.add_argument("--defs", metavar="FILE",
+                   help="a SingSurf .defs file as the catalogue: one page per definition, grouped as "
+                        "the file groups them (instead of --catalogue)")
     p.add_argument("--coarse", type=_power_of_two, metavar="N",
                    help="override every entry's coarse resolution (quick previews)")
     p.add_argument("--fine", type=_power_of_two, metavar="N",
@@ -90,7 +98,7 @@ def _failure(entry: gallery_lib.Entry, message: str) -> dict[str, Any]:
     from dataclasses import asdict
 
     return gallery_lib._clean({
-        **asdict(entry), "ok": False, "error": message, "traceback": None, "stage": "worker",
+        **asdict(entry), "ok": False, "error": message, "unread": None, "traceback": None, "stage": "worker",
         "time": None, "render_time": None, "report": None, "report_text": None,
         "singularities": [], "files": {}, "warnings": [],
         "comparison": {"types": None, "forms": None, "branches": None, "euler": None, "verdict": "error"},
@@ -172,9 +180,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         Exit status (see the module docstring).
     """
     args = build_parser().parse_args(None if argv is None else list(argv))
-    catalogue = Path(args.catalogue)
+    catalogue = Path(args.defs or args.catalogue)
     try:
-        groups, entries = load_catalogue(catalogue)
+        groups, entries = load_definitions(catalogue) if args.defs else load_catalogue(catalogue)
     except CatalogueError as exc:
         print(f"gallery: error: {exc}", file=sys.stderr)
         return 2
@@ -206,9 +214,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     c = counts(records)
     if not args.quiet:
         print(f"{len(records)} surfaces in {total:.1f} s: {c['match']} match, {c['mismatch']} mismatch, "
-              f"{c['unsupported']} unsupported, {c['error']} failed")
+              f"{c['unsupported']} unsupported, {c['meshed']} meshed without reference, "
+              f"{c['unread']} do not read, {c['error']} failed")
         for r in records:
-            if r.get("error"):
+            if r.get("error") and not r.get("unread"):
                 print(f"  failed: {r['name']}: {r['error']}")
         print(f"open {index.resolve().as_uri()}")
     return 1 if args.strict and c["error"] else 0

@@ -1,7 +1,9 @@
 """The ``singmesh`` command line.
 
 ``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N] [a=1 ...]``
-meshes, writes and prints the report; ``singmesh classify "EQUATION" --at X Y Z``
+meshes, writes and prints the report (``--defs FILE --name NAME`` instead of
+the equation meshes a definition of a SingSurf file on its own box);
+``singmesh defs FILE`` lists such a file; ``singmesh classify "EQUATION" --at X Y Z``
 names a singular point; ``singmesh gallery ...`` builds the gallery.  Bad
 input prints one error line and exits with status 2.
 """
@@ -13,6 +15,7 @@ import runpy
 import sys
 from pathlib import Path
 
+from .defs import find_definition, read_definitions
 from .errors import SurfaceError
 
 
@@ -21,8 +24,10 @@ def _params(items: list[str]) -> dict[str, str]:
     for item in items:
         if "=" not in item:
             raise SurfaceError(f"a parameter is given as name=value, not {item!r}")
-        name, value = item.split("=", 1)
-        out[name.strip()] = value.strip()
+        name, value = (part.strip() for part in item.split("=", 1))
+        if not name.isidentifier():
+            raise SurfaceError(f"{name!r} in {item!r} is not a parameter name")
+        out[name] = value
     return out
 
 
@@ -30,19 +35,36 @@ def _mesh_command(argv: list[str]) -> int:
     from .api import DEFAULT_BOX, mesh
 
     p = argparse.ArgumentParser(prog="singmesh mesh", description="Mesh F(x, y, z) = 0 in a box.")
-    p.add_argument("equation", help='e.g. "4(x^2+y^2+z^2) + 16 x y z - 1"')
-    p.add_argument("params", nargs="*", metavar="name=value", help="parameter values")
+    p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
+                   help='the equation, e.g. "4(x^2+y^2+z^2) + 16 x y z - 1", then parameter values '
+                        "(with --defs: parameter values only)")
     p.add_argument("-o", "--output", help="mesh file; the format comes from the suffix "
                    "(.ply .obj .stl .vtk .vtu .off)")
     p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
-                   help="the region meshed (default -2 2 -2 2 -2 2)")
+                   help="the region meshed (default -2 2 -2 2 -2 2, or the definition's box)")
     p.add_argument("--coarse", type=int, default=32,
                    help="boxes per axis of the uniform subdivision (power of two; default 32)")
     p.add_argument("--fine", type=int, default=256,
                    help="boxes per axis at the deepest refinement (power of two; default 256)")
+    p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
+    p.add_argument("--name", help="the definition to mesh (with --defs)")
     args = p.parse_args(argv)
-    box = DEFAULT_BOX if args.box is None else [args.box[0:2], args.box[2:4], args.box[4:6]]
-    m = mesh(args.equation, box, coarse=args.coarse, fine=args.fine, **_params(args.params))
+    box = None if args.box is None else [args.box[0:2], args.box[2:4], args.box[4:6]]
+    if args.defs:
+        if not args.name:
+            raise SurfaceError("--defs needs --name NAME: the definition to mesh (singmesh defs FILE lists them)")
+        d = find_definition(read_definitions(args.defs), args.name)
+        surface = d.surface(**_params(args.args))
+        box = box or d.box or DEFAULT_BOX
+    else:
+        if args.name:
+            raise SurfaceError("--name goes with --defs FILE")
+        if not args.args:
+            raise SurfaceError('give the equation, e.g. singmesh mesh "x^2+y^2-z^2", or --defs FILE --name NAME')
+        surface = args.args[0]
+        params = _params(args.args[1:])
+        box = box or DEFAULT_BOX
+    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, **({} if args.defs else params))
     print(m.report_text())
     if args.output:
         try:
@@ -52,6 +74,54 @@ def _mesh_command(argv: list[str]) -> int:
             return 2
         print(f"written              {path}")
     return 0
+
+
+def _defs_command(argv: list[str]) -> int:
+    p = argparse.ArgumentParser(prog="singmesh defs",
+                                description="List the definitions of a SingSurf .defs file.")
+    p.add_argument("file")
+    p.add_argument("--name", help="show this definition whole")
+    p.add_argument("--check", action="store_true",
+                   help="read every implicit surface and say whether it reads (and why not)")
+    args = p.parse_args(argv)
+    definitions = read_definitions(args.file)
+    if args.name:
+        d = find_definition(definitions, args.name)
+        print(f"{d.name}  ({' / '.join(d.group) or 'no group'}; {d.type}; {d.where})")
+        print(f"box         {_fmt_box(d.box)}")
+        for k, v in d.parameters.items():
+            print(f"parameter   {k} = {v}")
+        for k, v in d.options.items():
+            print(f"option      {k}: {' '.join(f'{a}={b}' for a, b in v.items())}")
+        print(d.equation)
+        return 0
+    group = None
+    reads = refused = 0
+    for d in definitions:
+        if d.group != group:
+            group = d.group
+            print(" / ".join(group) or "(no group)")
+        line = f"  {d.name:<40s} {d.type:<6s} {_fmt_box(d.box)}"
+        if d.parameters:
+            line += "  " + " ".join(f"{k}={v}" for k, v in d.parameters.items())
+        if args.check and d.type == "asurf":
+            try:
+                s = d.surface()
+                line += f"\n      reads: degree {s.degree}"
+                reads += 1
+            except SurfaceError as exc:
+                line += f"\n      does not read: {exc}"
+                refused += 1
+        print(line)
+    if args.check:
+        print(f"{len(definitions)} definitions; of the implicit surfaces {reads} read, {refused} do not")
+    return 0
+
+
+def _fmt_box(box) -> str:
+    if box is None:
+        return "(default box)"
+    return " x ".join(f"[{lo:g}, {hi:g}]" for lo, hi in box)
 
 
 def _classify_command(argv: list[str]) -> int:
@@ -71,14 +141,17 @@ def _gallery_command(argv: list[str]) -> int:
     return 0
 
 
-COMMANDS = {"mesh": _mesh_command, "classify": _classify_command, "gallery": _gallery_command}
+COMMANDS = {"mesh": _mesh_command, "defs": _defs_command, "classify": _classify_command,
+            "gallery": _gallery_command}
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
-        print("usage: singmesh {mesh,classify,gallery} ...\n"
+        print("usage: singmesh {mesh,defs,classify,gallery} ...\n"
               '  singmesh mesh "x^2+y^2-z^2" -o cone.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [a=1 ...]\n'
+              "  singmesh mesh --defs FILE --name NAME -o out.ply [a=1 ...]\n"
+              "  singmesh defs FILE [--check] [--name NAME]\n"
               '  singmesh classify "x^2+y^2-z^2" --at 0 0 0\n'
               "  singmesh gallery [--out DIR] [--only NAME ...] [--jobs N]", file=sys.stderr)
         return 0 if argv and argv[0] in ("-h", "--help") else 2

@@ -1,9 +1,11 @@
-"""Parse a surface equation into a polynomial F(x, y, z) and evaluate it.
+"""A surface equation as a polynomial F(x, y, z), and its evaluation.
 
-The text may be written in sympy syntax or in the SingSurf style: ``^`` for
-powers, implicit multiplication (``2 x y``, ``x(y+1)``), ``lhs = rhs`` for
-``lhs - rhs``, and named parameters either as keyword arguments or as
-trailing definitions (``a x + b y - 1; a = 2; b = 3;``).  Constant
+The text is read by :mod:`singmesh.syntax` (SingSurf's equation language,
+which also takes sympy's syntax): ``^`` for powers, implicit
+multiplication (``2 x y``, ``x(y+1)``), ``lhs = rhs`` for ``lhs - rhs``,
+statements over several lines with ``//`` comments, and later
+``NAME = EXPR;`` statements defining names in terms of x, y, z, parameters
+and each other.  Parameters may also come as keyword arguments.  Constant
 subexpressions such as ``sqrt(5)``, ``pi`` or ``cos(2 pi/5)`` are numbers.
 
 The result, :class:`Surface`, holds the exact sympy polynomial, the dense
@@ -14,90 +16,15 @@ and evaluates all of them at points.
 
 from __future__ import annotations
 
-import re
-import tokenize
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 import sympy
-from sympy.parsing.sympy_parser import (
-    convert_xor,
-    implicit_multiplication,
-    parse_expr,
-    standard_transformations,
-)
 
 from .errors import SurfaceError
+from .syntax import VARIABLES, X, Y, Z, read_equation  # noqa: F401  (X, Y, Z re-exported)
 from .tolerances import MAX_DEGREE, ZERO_ULPS
-
-X, Y, Z = sympy.symbols("x y z", real=True)
-VARIABLES = (X, Y, Z)
-
-
-
-def _split_names(tokens, local_dict, global_dict):
-    """Read an unknown name made of known ones as their product: ``xyz``, ``tx``.
-
-    SingSurf writes ``16xyz``; a name that is itself known (a parameter,
-    a function) is never split.
-    """
-    from tokenize import NAME, OP
-
-    known = [k for k in local_dict if isinstance(local_dict[k], sympy.Symbol)]
-    out = []
-    for i, tok in enumerate(tokens):
-        name = tok[1]
-        follows_call = i + 1 < len(tokens) and tokens[i + 1][1] == "("
-        if tok[0] == NAME and name not in local_dict and name not in global_dict and not follows_call:
-            parts = _segment(name, known)
-            if parts and len(parts) > 1:
-                for j, part in enumerate(parts):
-                    if j:
-                        out.append((OP, "*"))
-                    out.append((NAME, part))
-                continue
-        out.append(tok)
-    return out
-
-
-def _segment(name: str, known: list[str]):
-    """Split ``name`` into a sequence of ``known`` names, longest first."""
-    best = {0: []}
-    for i in range(1, len(name) + 1):
-        for k in sorted(known, key=len, reverse=True):
-            j = i - len(k)
-            if j >= 0 and j in best and name[j:i] == k:
-                best[i] = best[j] + [k]
-                break
-    return best.get(len(name))
-
-
-_TRANSFORMS = (_split_names,) + standard_transformations + (implicit_multiplication, convert_xor)
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*$")
-
-# Names the text may use besides x, y, z and the parameters: numbers and
-# the functions that make them.  Everything else is an unknown symbol.
-_CONSTANTS = {
-    name: getattr(sympy, name)
-    for name in (
-        "sqrt", "cbrt", "root", "exp", "log", "ln", "sin", "cos", "tan",
-        "asin", "acos", "atan", "sinh", "cosh", "tanh", "pi", "E", "Rational",
-        "Integer", "Float", "binomial", "factorial", "Abs",
-    )
-    if hasattr(sympy, name)
-}
-_CONSTANTS["ln"] = sympy.log
-_CONSTANTS["abs"] = sympy.Abs
-_CONSTANTS.update(nan=sympy.nan, inf=sympy.oo, oo=sympy.oo)
-# What the parser's generated code calls; with nothing else in the global
-# namespace an unknown name becomes a Symbol (reported), never one of
-# sympy's functions (``beta``, ``gamma``, ``S``).
-_GLOBALS = {
-    "__builtins__": {},
-    "Symbol": sympy.Symbol, "Integer": sympy.Integer, "Float": sympy.Float,
-    "Rational": sympy.Rational, "Function": sympy.Function,
-}
 
 
 def _differentiate(coeffs: np.ndarray, axis: int) -> np.ndarray:
@@ -181,10 +108,12 @@ class Surface:
         Parameters
         ----------
         source : str or sympy.Expr or Surface
-            The equation.  ``"lhs = rhs"`` means ``lhs - rhs``; trailing
-            ``name = value;`` parts define parameters.
+            The equation in SingSurf's language (:mod:`singmesh.syntax`):
+            ``"lhs = rhs"`` means ``lhs - rhs``; later ``NAME = EXPR;``
+            statements define names, which may use x, y, z and each other.
         **params
-            Parameter values; they override trailing definitions.
+            Parameter values (numbers, or text in the same language); they
+            override the text's definitions of the same names.
 
         Raises
         ------
@@ -196,30 +125,25 @@ class Surface:
                 return source
             source = source.expr
         if isinstance(source, sympy.Basic):
-            expr, text, defs = sympy.sympify(source), str(source), {}
+            text = str(source)
+            expr, values = _substitute(sympy.sympify(source), params)
         elif isinstance(source, str):
             text = source
-            expr, defs = _parse_text(source)
+            equation = read_equation(source, params)
+            expr, values = equation.expr, equation.values
         else:
             raise SurfaceError(
                 f"a surface is given as text or a sympy expression, not {type(source).__name__}"
             )
-        values = _resolve_params(defs, params)
         return cls._from_expr(expr, text, values)
 
     @classmethod
     def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr]) -> "Surface":
-        # Symbols may come with other assumptions (a user's sympy expression):
-        # identify them by name.
-        by_name = {s.name: s for s in expr.free_symbols}
-        subs = {by_name[v.name]: v for v in VARIABLES if v.name in by_name}
-        subs.update({by_name[k]: v for k, v in values.items() if k in by_name})
-        expr = expr.subs(subs)
         unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
         if unknown:
             raise SurfaceError(
                 "unknown symbol%s %s: only x, y, z are variables; give parameters as "
-                "keyword arguments or as trailing definitions such as '; %s = 1;'"
+                "keyword arguments or as definitions such as '; %s = 1;'"
                 % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
             )
         _check_polynomial(expr)
@@ -325,89 +249,7 @@ class Surface:
         return f"Surface({str(self.expr)!r}, degree={self.degree})"
 
 
-# ---------------------------------------------------------------- parsing
-def _parse_one(text: str, what: str, names) -> sympy.Expr:
-    local = dict(_CONSTANTS)
-    local.update({v.name: v for v in VARIABLES})
-    local.update({n: sympy.Symbol(n, real=True) for n in names})
-    try:
-        expr = parse_expr(text, local_dict=local, global_dict=dict(_GLOBALS),
-                          transformations=_TRANSFORMS, evaluate=True)
-    except SyntaxError as exc:
-        where = f" at position {exc.offset}" if exc.offset else ""
-        raise SurfaceError(f"syntax error in {what} {text.strip()!r}{where}") from None
-    except tokenize.TokenError:
-        raise SurfaceError(
-            f"syntax error in {what} {text.strip()!r} at position {len(text.rstrip()) + 1}: "
-            "unexpected end (unclosed parenthesis?)"
-        ) from None
-    except (TypeError, ValueError, AttributeError, NameError) as exc:
-        raise SurfaceError(f"cannot read {what} {text.strip()!r}: {exc}") from None
-    if not isinstance(expr, sympy.Expr):
-        raise SurfaceError(f"{what} {text.strip()!r} is not an algebraic expression")
-    if expr.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
-        raise SurfaceError(f"{what} {text.strip()!r} has a NaN or infinite coefficient")
-    return expr
-
-
-def _parse_text(text: str) -> tuple[sympy.Expr, dict[str, sympy.Expr]]:
-    """Split ``equation; a = 1; b = 2`` and parse each part."""
-    if not text.strip():
-        raise SurfaceError("the equation is empty")
-    parts = [p for p in text.split(";") if p.strip()]
-    if not parts:
-        raise SurfaceError("the equation is empty")
-    equation, definitions = parts[0], parts[1:]
-    defs: dict[str, str] = {}
-    for d in definitions:
-        if d.count("=") != 1:
-            raise SurfaceError(f"a definition after ';' must read 'name = value', not {d.strip()!r}")
-        name, value = (s.strip() for s in d.split("="))
-        if not _NAME.match(name):
-            raise SurfaceError(f"{name!r} is not a parameter name")
-        if name in ("x", "y", "z"):
-            raise SurfaceError(f"{name} is a variable and cannot be given a value")
-        defs[name] = value
-    names = list(defs)
-    if equation.count("=") > 1 or "==" in equation:
-        raise SurfaceError(f"the equation {equation.strip()!r} has more than one '='")
-    sides = equation.split("=")
-    parsed = [_parse_one(s, "the equation", names) if s.strip() else None for s in sides]
-    if any(p is None for p in parsed):
-        raise SurfaceError(f"one side of '=' is empty in {equation.strip()!r}")
-    expr = parsed[0] - parsed[1] if len(parsed) == 2 else parsed[0]
-    parsed_defs = {n: _parse_one(v, f"the value of {n}", names) for n, v in defs.items()}
-    return expr, parsed_defs
-
-
-def _resolve_params(defs: dict, kwargs: dict) -> dict[str, sympy.Expr]:
-    """Numeric values of all parameters; definitions may use earlier ones."""
-    values: dict[str, sympy.Expr] = {}
-    for name, value in kwargs.items():
-        try:
-            values[name] = sympy.sympify(value)
-        except (sympy.SympifyError, TypeError):
-            raise SurfaceError(f"parameter {name} = {value!r} is not a number") from None
-    pending = {n: e for n, e in defs.items() if n not in values}
-    for _ in range(len(pending) + 1):
-        for name, expr in list(pending.items()):
-            known = {s: values[s.name] for s in expr.free_symbols if s.name in values}
-            e = expr.subs(known)
-            if not any(s.name in pending for s in e.free_symbols):
-                values[name] = e
-                del pending[name]
-    if pending:
-        raise SurfaceError("parameters defined in terms of each other: " + ", ".join(pending))
-    for name, e in values.items():
-        bad = sorted(s.name for s in e.free_symbols)
-        if bad:
-            raise SurfaceError(f"parameter {name} depends on unknown symbol(s) {', '.join(bad)}")
-        num = complex(sympy.N(e, 30))
-        if num.imag != 0 or not np.isfinite(num.real):
-            raise SurfaceError(f"parameter {name} = {e} is not a finite real number")
-    return values
-
-
+# ---------------------------------------------------------------- checks
 def _check_polynomial(expr: sympy.Expr) -> None:
     """Raise SurfaceError naming the first subexpression that is not polynomial."""
     for node in sympy.preorder_traversal(expr):
@@ -433,3 +275,31 @@ def _to_float(c: sympy.Expr, monom) -> float:
     if not np.isfinite(value.real):
         raise SurfaceError(f"the coefficient of {term} is not finite: {c}")
     return float(value.real)
+
+
+def _substitute(expr: sympy.Expr, params: Mapping) -> tuple[sympy.Expr, dict]:
+    """A user's sympy expression with x, y, z and ``params`` identified by name.
+
+    Symbols may come with other assumptions than ours (``sympy.symbols('x')``).
+    """
+    if not isinstance(expr, sympy.Expr):
+        raise SurfaceError(f"{expr} is not an algebraic expression")
+    values = {}
+    for name, value in params.items():
+        try:
+            v = sympy.sympify(value)
+        except (sympy.SympifyError, TypeError):
+            raise SurfaceError(f"parameter {name} = {value!r} is not a number") from None
+        if not isinstance(v, sympy.Expr) or v.free_symbols:
+            raise SurfaceError(f"parameter {name} = {value!r} is not a number")
+        values[name] = v
+    subs = {}
+    for sym in expr.free_symbols:
+        if sym.name in ("x", "y", "z"):
+            subs[sym] = VARIABLES["xyz".index(sym.name)]
+        elif sym.name in values:
+            subs[sym] = values[sym.name]
+    expr = expr.xreplace(subs)
+    if expr.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
+        raise SurfaceError("the equation has a NaN or infinite coefficient")
+    return expr, values

@@ -383,3 +383,70 @@ def test_page_renders_in_headless_chromium(built, tmp_path):
     rgb = img[..., :3]
     orange = (rgb[..., 0] > 0.55) & (rgb[..., 0] - rgb[..., 2] > 0.3) & (rgb[..., 1] > rgb[..., 2])
     assert orange.mean() > 0.005, "no surface thumbnails visible in the screenshot"
+
+
+DEFS = """\
+<group name="Quadrics">
+<group name="Round">
+<definition name="Sphere" type="asurf">
+// A round sphere of radius r
+x^2 + y^2
+  + z^2 - r^2;
+<parameter name="r" value="0.8">
+<variable name="x" min="-1.04" max="1.03">
+<variable name="y" min="-1.03" max="1.04">
+<variable name="z" min="-1.02" max="1.05"}, >
+</definition>
+</group>
+<definition name="Cone" type="asurf">
+X^2 - y^2 - z^2; X = x - c; c = 0;
+</definition>
+</group>
+<definition name="Undefined parameter" type="asurf">
+(x-x0)^2 + y^2 + z^2 - 1;
+</definition>
+<definition name="Curve" type="acurve">
+x^2 - y^3;
+</definition>
+"""
+
+
+def test_gallery_from_a_defs_file(generate, tmp_path):
+    defs = tmp_path / "mine.defs"
+    defs.write_text(DEFS, encoding="utf-8")
+    out = tmp_path / "defs"
+    status = generate.main(["--defs", str(defs), "--out", str(out), "--size", "120",
+                            "--coarse", "8", "--fine", "32", "--quiet", "--strict"])
+    assert status == 0   # definitions that do not read are not failures
+    report = json.loads((out / "report.json").read_text(encoding="utf-8"))
+    by_name = {r["name"]: r for r in report["entries"]}
+    assert list(by_name) == ["Sphere", "Cone", "Undefined parameter", "Curve"]
+    sphere, cone = by_name["Sphere"], by_name["Cone"]
+    assert sphere["ok"] and sphere["box"] == [[-1.04, 1.03], [-1.03, 1.04], [-1.02, 1.05]]
+    assert sphere["report"]["euler_characteristic"] == 2
+    assert np.allclose(np.linalg.norm(_ply_vertices(out / sphere["files"]["ply"]), axis=1), 0.8)
+    assert sphere["comparison"]["verdict"] == "meshed" and sphere["description"] == "A round sphere of radius r"
+    assert cone["ok"] and [s["name"] for s in cone["singularities"]] == ["A1--"]
+    index = (out / "index.html").read_text(encoding="utf-8")
+    # Grouped as the file groups them.
+    assert index.index("Quadrics / Round") < index.index("Sphere") < index.index(">Quadrics<")
+    # The definitions that do not read: a line each in the index, with the reason and place.
+    undefined = by_name["Undefined parameter"]
+    assert not undefined["ok"] and "unknown symbol x0" in undefined["unread"]
+    assert "mine.defs, line 18, column 4" in undefined["unread"]
+    assert html.escape(undefined["unread"]) in index and 'data-verdict="unread"' in index
+    assert "not an implicit surface" in by_name["Curve"]["unread"]
+    assert f'id="{undefined["slug"]}"' not in index   # a line, not a card
+
+
+def test_gallery_defs_file_errors(generate, tmp_path, capsys):
+    bad = tmp_path / "bad.defs"
+    bad.write_text('<definition name="a" type="asurf">\nx;\n', encoding="utf-8")
+    assert generate.main(["--defs", str(bad), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert "not closed by </definition>" in capsys.readouterr().err
+
+
+def _ply_vertices(path):
+    import meshio
+
+    return meshio.read(path).points
