@@ -32,6 +32,7 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     Returns
     -------
     polygons : list of (keys (k,), points (k, 3)); the first vertex is p
+        or a traced point (an inner vertex to fan from, if large)
     splits : dict
         ``(square, a, b) -> [(node_key, node_point), ...]`` for every cycle
         link a -> b (on that square) that received face nodes, in order
@@ -110,12 +111,18 @@ def _sectors(spokes, p_key, p, keys, pts):
             area2 = np.linalg.norm(np.cross(e[0], -e[2]))
             if area2 <= 1e-6 * max(np.dot(x, x) for x in e):
                 flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
-        polygons += zipped
-        # The outer part: the cycle from A's end to B's end, closed by the
-        # zipper's last edge (nothing left when they are neighbours).
+        # The outer part: the cycle from A's end to B's end.  It joins the
+        # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
+        # fanned from x, an inner vertex, when large.  Closed by the chord
+        # alone, an arc along a flat sheet cut by one face of the star would
+        # have no area.
         if steps >= 2:
-            polygons.append((np.array([keys[(at + j) % n] for j in range(steps + 1)], np.int64),
-                             np.array([pts[(at + j) % n] for j in range(steps + 1)])))
+            last_keys, last_pts = zipped.pop()
+            ends = (keys[at], keys[nxt_at])
+            x = next(i for i, k in enumerate(last_keys) if k not in ends)
+            polygons.append((np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64),
+                             np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)])))
+        polygons += zipped
     return polygons, flat
 
 

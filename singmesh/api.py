@@ -15,7 +15,6 @@ from singmesh.boxes.octree import star, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
-from singmesh.skeleton.classify import classify
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -93,11 +92,10 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
 
     t_sing = time.perf_counter()
+    # A curve of singular points (the classifier finds an infinite Milnor
+    # number on it) is not meshed as points: ``overflow``.
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
-    kinds = [_classify(surf, sp.point) for sp in points]
-    # The classifier recognises a point on a curve of singular points
-    # (infinite Milnor number): such a locus is not meshed as points.
-    overflow = overflow or any(k is not None and "curve of singular points" in k.note for k in kinds)
+    kinds = [sp.classification for sp in points]
     t_sing = time.perf_counter() - t_sing
     cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
     # First pass: the boxes at each singular point go to the fine level.
@@ -216,13 +214,6 @@ def _stars(tree, cubes, points):
     return group, stars, clashes
 
 
-def _classify(surf, point):
-    try:
-        return classify(surf, point)
-    except SurfaceError:
-        return None  # the classifier's own test of singularity disagreed
-
-
 def _point_key(i: int) -> int:
     """Vertex key of singular point i: below all event keys (which are >= 0)."""
     return -1 - i
@@ -239,6 +230,30 @@ def _square_bounds(tree, square):
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
+def _stray_cycles(cycles, events, stars, points) -> np.ndarray:
+    """Cycles on a star's boundary that are not links of its point.
+
+    The classifier knows how many branches meet at the point; a star cube
+    can also cut off a small piece of surface that does not pass through
+    the point (the thin sheet of an E8 or A5 grazing a corner of the cube).
+    Beyond the expected number, the smallest cycles are such pieces: they
+    bound discs and are meshed as plain facets, not fanned into the point.
+    """
+    stray = np.zeros(len(cycles), bool)
+    star_cycles = np.nonzero(np.isin(cycles.box, list(stars)))[0]
+    for box in np.unique(cycles.box[star_cycles]).tolist():
+        kind = points[stars[box]].classification
+        expected = getattr(kind, "branches", None)
+        mine = star_cycles[cycles.box[star_cycles] == box]
+        if expected is None or len(mine) <= expected:
+            continue
+        extent = [np.ptp(events.point[cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]]], axis=0).max()
+                  for c in mine]
+        order = np.argsort(extent, kind="stable")[::-1]
+        stray[mine[order[expected:]]] = True
+    return stray
+
+
 def _polygons(surf, tree, events, links, cycles, stars, points):
     """Facet polygons (offsets, keys, points, apex flags) and branch counts.
 
@@ -247,6 +262,7 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
     """
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
+    plain |= _stray_cycles(cycles, events, stars, points)
     ev = cycles.events
     owner = np.repeat(np.arange(len(cycles)), sizes)
     keep = plain[owner]
@@ -274,7 +290,7 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
             parts_keys.append(k)
             parts_pts.append(q)
             parts_sizes.append([len(k)])
-            apex.append([True])
+            apex.append([True])  # large ones fan from their first vertex, p or a traced point
         branches[i] = branches.get(i, 0) + 1
     sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
     offsets = np.concatenate([[0], np.cumsum(sizes)])

@@ -102,7 +102,7 @@ class Mesh:
         """The report as aligned lines, singular points after it."""
         r = self.report()
         lines = [
-            f"surface              {self.surface.expr}",
+            f"surface              {self.surface}",
             "box                  " + " x ".join(f"[{a:g}, {b:g}]" for a, b in self.box),
             f"vertices             {r['vertices']}",
             f"faces                {r['faces']}",

@@ -92,6 +92,11 @@ class Surface:
         Total degree.
     params : dict
         The parameter values that were substituted.
+    rounding : float
+        Relative precision of the coefficients as the input gave them: half
+        a unit in the last digit of its longest rounded decimal (a 15-digit
+        coefficient: 5e-15), and never below double precision.  A point
+        where F and grad F vanish to this precision is singular.
     """
 
     text: str
@@ -99,6 +104,7 @@ class Surface:
     coeffs: np.ndarray
     degree: int
     params: Mapping[str, float] = field(default_factory=dict)
+    rounding: float = float(np.finfo(float).eps)
 
     # ------------------------------------------------------------ building
     @classmethod
@@ -127,18 +133,19 @@ class Surface:
         if isinstance(source, sympy.Basic):
             text = str(source)
             expr, values = _substitute(sympy.sympify(source), params)
+            rounding = max([0.0] + [2.0 ** -f._prec for f in expr.atoms(sympy.Float)])
         elif isinstance(source, str):
             text = source
             equation = read_equation(source, params)
-            expr, values = equation.expr, equation.values
+            expr, values, rounding = equation.expr, equation.values, equation.rounding
         else:
             raise SurfaceError(
                 f"a surface is given as text or a sympy expression, not {type(source).__name__}"
             )
-        return cls._from_expr(expr, text, values)
+        return cls._from_expr(expr, text, values, rounding)
 
     @classmethod
-    def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr]) -> "Surface":
+    def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr], rounding: float = 0.0) -> "Surface":
         unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
         if unknown:
             raise SurfaceError(
@@ -169,7 +176,8 @@ class Surface:
         if not np.any(coeffs):
             raise SurfaceError("all coefficients round to zero in double precision")
         return cls(text=text, expr=expr, coeffs=coeffs, degree=degree,
-                   params={k: float(v) for k, v in values.items()})
+                   params={k: float(v) for k, v in values.items()},
+                   rounding=max(float(rounding), float(np.finfo(float).eps)))
 
     # ------------------------------------------------------------ derived
     @property
@@ -245,8 +253,17 @@ class Surface:
         v = self(points)
         return np.abs(v) <= ZERO_ULPS * np.finfo(float).eps * self.magnitude(points)
 
+    def __str__(self) -> str:
+        """The expanded polynomial, decimals written as decimals (``0.123`` not ``123/1000``)."""
+        subs = {}
+        for r in self.expr.atoms(sympy.Rational):
+            text = None if r.q == 1 else _decimal(r)
+            if text is not None:
+                subs[r] = sympy.Float(text, len(text.strip("-").replace(".", "").lstrip("0")))
+        return str(self.expr.xreplace(subs))
+
     def __repr__(self) -> str:
-        return f"Surface({str(self.expr)!r}, degree={self.degree})"
+        return f"Surface({str(self)!r}, degree={self.degree})"
 
 
 # ---------------------------------------------------------------- checks
@@ -303,3 +320,17 @@ def _substitute(expr: sympy.Expr, params: Mapping) -> tuple[sympy.Expr, dict]:
     if expr.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
         raise SurfaceError("the equation has a NaN or infinite coefficient")
     return expr, values
+
+
+def _decimal(r: sympy.Rational) -> str | None:
+    """The exact decimal of a rational whose denominator is 2^a 5^b, else None."""
+    q, twos, fives = int(r.q), 0, 0
+    while q % 2 == 0:
+        q, twos = q // 2, twos + 1
+    while q % 5 == 0:
+        q, fives = q // 5, fives + 1
+    if q != 1:
+        return None
+    digits = max(twos, fives)
+    text = str(abs(int(r.p)) * 10 ** digits // int(r.q)).rjust(digits + 1, "0")
+    return ("-" if r.p < 0 else "") + text[:-digits] + "." + text[-digits:]

@@ -68,6 +68,10 @@ FUNCTIONS = {
     "max": sympy.Max, "Max": sympy.Max, "Rational": sympy.Rational, "Integer": sympy.Integer,
     "binomial": sympy.binomial, "factorial": sympy.factorial, "pow": sympy.Pow,
 }
+#: Decimals with at most this many significant digits are exact (``0.9``);
+#: longer ones are rounded reals (see :func:`literal_rounding`).
+EXACT_DIGITS = 6
+
 #: Named constants; a definition or parameter of the same name wins.
 CONSTANTS = {"pi": sympy.pi, "e": sympy.E, "E": sympy.E,
              "nan": sympy.nan, "inf": sympy.oo, "oo": sympy.oo}
@@ -407,11 +411,15 @@ class Equation:
         The definitions (and parameters) that are constants, by name.
     definitions : dict
         Every definition as written, by name (sympy, in terms of other names).
+    rounding : float
+        Relative precision of the numbers as typed (:func:`literal_rounding`):
+        0 when every number is exact.
     """
 
     expr: sympy.Expr
     values: dict
     definitions: dict
+    rounding: float = 0.0
 
 
 def _name_statements(text: str, definitions: list[Statement]) -> dict[str, Statement]:
@@ -480,7 +488,47 @@ def read_equation(text: str, params: dict | None = None) -> Equation:
     if expr.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
         raise SurfaceError("the equation has a NaN or infinite coefficient")
     values = {n: e for n, e in resolved.items() if not e.free_symbols}
-    return Equation(expr=expr, values=values, definitions={n: d[0] for n, d in defined.items()})
+    rounding = max([literal_rounding(tokens)] + [_value_rounding(v) for v in params.values()])
+    return Equation(expr=expr, values=values, definitions={n: d[0] for n, d in defined.items()},
+                    rounding=rounding)
+
+
+def literal_rounding(tokens: list[Token]) -> float:
+    """Relative precision of the decimal numbers among ``tokens``.
+
+    A decimal written with more than ``EXACT_DIGITS`` significant digits
+    is a rounded real number (``1.61803398875``, a coefficient of a rotated
+    polynomial): half a unit in its last digit, relative.  Shorter ones
+    (``0.9``, ``2.5e-1``) and integers are taken as exact.  Returns the
+    largest, 0 when all are exact.
+    """
+    worst = 0.0
+    for t in tokens:
+        if t.kind == "number":
+            worst = max(worst, _digits_rounding(t.text))
+    return worst
+
+
+def _digits_rounding(text: str) -> float:
+    mantissa = re.split("[eE]", text)[0]
+    if "." not in mantissa:
+        return 0.0
+    digits = mantissa.replace(".", "").lstrip("0")
+    if len(digits) <= EXACT_DIGITS:
+        return 0.0
+    return 0.5 * 10.0 ** (1 - len(digits))
+
+
+def _value_rounding(value) -> float:
+    """The rounding of a caller's parameter value (text, float or sympy)."""
+    if isinstance(value, str):
+        try:
+            return literal_rounding(tokenize(value))
+        except SurfaceError:
+            return 0.0
+    if isinstance(value, float):
+        return _digits_rounding(repr(value))
+    return 0.0
 
 
 def _finite(v: float) -> bool:

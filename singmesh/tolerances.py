@@ -21,9 +21,25 @@ PRUNE_SLACK = 1e-10
 #: to get it (the rounding-error bound of the evaluation).
 ZERO_ULPS = 64.0
 
+#: What rounding the input's coefficients can do to a value computed from
+#: them: a coefficient typed to relative precision rho (``Surface.rounding``,
+#: e.g. 5e-15 for 15 significant digits) moves F(p) by up to rho times the
+#: sum of its terms' magnitudes at p, and expanding a product of rounded
+#: factors multiplies that by up to the degree.  A value below
+#: ``INPUT_ROUNDING * degree * rho`` times its magnitude is zero to the
+#: precision of the input.
+INPUT_ROUNDING = 8.0
+
 #: A root of F on a lattice line closer than this (in fine-lattice cell
 #: units) to a lattice point at which F is zero *is* that lattice point.
 SNAP_LATTICE = 1e-6
+
+#: A lattice point closer to the surface than this (relative to the box) is
+#: a zero of F: the roots on the lines through it become one vertex, placed
+#: on the surface.  Apart, they would be vertices closer than this to each
+#: other, with slivers of zero area between them (a thin cusp, or a sheet
+#: nearly through a lattice point).
+SNAP_DISTANCE = 2e-9
 
 #: Roots of the restriction of F to a lattice line: eigenvalues whose
 #: imaginary part is below this (relative to the line's length scale) are
@@ -46,6 +62,10 @@ ZERO_AREA = 1e-12
 #: Triangles with doubled area below this times their longest edge squared
 #: are slivers: their longest edge is flipped where that helps.
 SLIVER_AREA = 1e-6
+
+#: A skeleton curve crossing a star's link cycle within this fraction of
+#: a link's length from one of its ends passes through that vertex.
+NODE_ON_VERTEX = 0.05
 
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
@@ -94,20 +114,21 @@ CLASSIFY_ORDERS = (8, 14, 20)
 CANDIDATE_SLACK = 1e-12
 
 #: Newton results with a relative residual max(|F|, |grad F|) / size of F's
-#: terms below this are kept for the multiple-precision check (degenerate
+#: terms below this are kept for classification and centring (degenerate
 #: points are only fixed to about eps**(1/k) in double precision).
 SINGULAR_LOOSE = 1e-6
 
-#: A singular point is accepted with a relative residual below this.
+#: A singular point is accepted with a relative residual below this (or
+#: below what the input's rounding allows, whichever is larger).
 SINGULAR_RESIDUAL = 1e-12
 
-#: A point whose smallest Hessian eigenvalue is below this fraction of the
-#: largest is refined in multiple precision (possibly degenerate).
-SINGULAR_REFINE = 1e-3
+#: Candidate boxes of the singular-point search are split at most this
+#: many at a time (memory: four Bernstein tensors each, 8 children).
+CANDIDATE_CHUNK = 2048
 
-#: At most this many points are refined in multiple precision; more mean a
-#: curve of singular points (reported as not isolated).
-SINGULAR_MAX_REFINE = 64
+#: More candidate boxes than this for skeleton nodes (F and two partial
+#: derivatives zero) are a curve of them (a surface of revolution), not points.
+SKELETON_NODE_MAX = 4096
 
 #: Singular points closer than this (relative to the box) are one point.
 SINGULAR_MERGE = 1e-7
@@ -119,9 +140,31 @@ SINGULAR_LEVEL = 8
 #: Depth of the search for skeleton nodes (F and two derivatives zero).
 SKELETON_NODE_LEVEL = 6
 
-#: Working digits of the multiple-precision refinement of degenerate points.
-SINGULAR_DPS = 60
 
-#: Hessian eigenvalues below this times the size of F's second-derivative
-#: coefficients count as zero (rank deficiency).
-HESSIAN_RANK = 1e-8
+
+# ---------------------------------------------------------------- centring
+#: Most steps towards the centre of one degenerate point.  A step for the
+#: true type lands on the centre; seen from afar a point looks like a
+#: smaller type, whose step only covers a fixed fraction (1/2 to 1/4) of
+#: the way: from the 5e-4 of a rotated A5 down to rounding takes ~40.
+CENTRE_STEPS = 80
+
+#: Hessian eigenvalues below this (relative to the Taylor coefficients)
+#: count as zero when reading the type that sets a centring step: off the
+#: centre the kernel eigenvalues are about the offset times the third
+#: derivatives (up to ~1e-3 for the 5e-4 of an A5).  A node whose small
+#: eigenvalue passes is tried and left where it is: the step leaves the
+#: singular set.
+CENTRE_RANK_RTOL = 1e-2
+
+#: Taylor coefficients below this (relative) count as zero when reading
+#: the type that sets a centring step.  Near an E7 the unfolding has D5
+#: points; read strictly, a point 3e-7 from the E7 is a D5 whose step is
+#: zero, while read at 1e-4 it is the E7 whose step reaches the centre.
+CENTRE_JET_RTOL = 1e-4
+
+#: Newton iterations on the truncated series within one centring step.
+CENTRE_NEWTON = 8
+
+#: Centring stops when a step moves the point less than this (relative).
+CENTRE_STOP = 4e-16

@@ -97,12 +97,13 @@ from singmesh.tolerances import (
     CLASSIFY_ORDERS,
     CLASSIFY_RANK_RTOL,
     CLASSIFY_SINGULAR_RTOL,
+    INPUT_ROUNDING,
     ZERO_ULPS,
 )
 
 from .splitting import compose, degree_grid, derivative, mul, series_order, split
 
-__all__ = ["SingularityType", "NotSingularError", "classify", "classify_command"]
+__all__ = ["SingularityType", "NotSingularError", "Frame", "analyse", "classify", "classify_command"]
 
 
 class NotSingularError(SurfaceError):
@@ -235,8 +236,42 @@ def classify(surface: "Surface | str", point: Sequence[float]) -> SingularityTyp
         ``CLASSIFY_SINGULAR_RTOL``.
     """
     s = surface if isinstance(surface, Surface) else Surface.parse(surface)
-    p = _as_point(point)
+    return analyse(s, _as_point(point))[0]
 
+
+@dataclass(frozen=True)
+class Frame:
+    """Coordinates in which a singular point's type was read (for centring it).
+
+    Attributes
+    ----------
+    basis : (3, 3) ndarray
+        Hessian eigenvectors as columns, the ``corank`` kernel vectors first.
+    eigenvalues : (3,) ndarray
+        In the same order.
+    corank : int
+    kernel : (corank, corank) ndarray or None
+        Corank 2: columns (X, Y) in the kernel coordinates in which the
+        cubic term is X^2 Y (D_k, k >= 5) or X^3 (E_k); the identity for D4.
+    order : int
+        Truncation order of the power series the type was read from.
+    """
+
+    basis: np.ndarray
+    eigenvalues: np.ndarray
+    corank: int
+    kernel: np.ndarray | None
+    order: int
+
+
+def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
+            jet_rtol: float = CLASSIFY_JET_RTOL) -> tuple[SingularityType, Frame]:
+    """:func:`classify` for a parsed surface, with the frame the type was read in.
+
+    ``rank_rtol`` sets which Hessian eigenvalues count as zero and
+    ``jet_rtol`` which Taylor coefficients do (relative to the largest);
+    centring reads the type more loosely than naming does.
+    """
     # Taylor polynomial at p (exact up to rounding: no truncation).
     T = compose(s.coeffs, p, np.eye(3), s.degree)
     deg = degree_grid(3, s.degree)
@@ -246,7 +281,7 @@ def classify(surface: "Surface | str", point: Sequence[float]) -> SingularityTyp
     hess = np.array([[T[tuple(np.add(_unit(a), _unit(b)))] * (2.0 if a == b else 1.0)
                       for b in range(3)] for a in range(3)])
     lam, vec = np.linalg.eigh(hess)
-    zero = np.abs(lam) <= CLASSIFY_RANK_RTOL * S
+    zero = np.abs(lam) <= rank_rtol * S
     signature = (int(np.sum((lam > 0) & ~zero)), int(np.sum((lam < 0) & ~zero)), int(np.sum(zero)))
     corank = signature[2]
     order = np.argsort(np.abs(lam), kind="stable")   # kernel variables first
@@ -254,25 +289,27 @@ def classify(surface: "Surface | str", point: Sequence[float]) -> SingularityTyp
     jet = _format_jet(T, CLASSIFY_JET_RTOL * S)
     common = dict(corank=corank, hessian_signature=signature, jet=jet,
                   point=tuple(float(c) for c in p))
+    frame = {"basis": vec, "eigenvalues": lam, "corank": corank, "kernel": None, "order": 0}
 
     if corank == 0:
-        return _a1(lam, vec, common)
+        return _a1(lam, vec, common), Frame(**frame)
     if corank == 3:
         return SingularityType(name="non-simple", real_form=None, milnor=None, branches=None,
-                               axis=None, note="corank 3 (type P8 or worse)", **common)
+                               axis=None, note="corank 3 (type P8 or worse)", **common), Frame(**frame)
 
-    tol = CLASSIFY_JET_RTOL * S
+    tol = jet_rtol * S
     mu = lam[corank:]
     for N in CLASSIFY_ORDERS:
         # Rotate to the eigenbasis (kernel first), truncated at order N.
         G = compose(T, np.zeros(3), vec, N)
         g, _ = split(G, corank, mu, N)
+        frame["order"] = N
         if corank == 1:
             found = _corank1(g, mu, vec, tol, common)
         else:
-            found = _corank2(g, mu, tol, N, common)
+            found = _corank2(g, mu, tol, N, common, frame)
         if found is not None:
-            return found
+            return found, Frame(**frame)
     N = max(CLASSIFY_ORDERS)
     if corank == 1:
         note = (f"the residual function vanishes to order {N}: a curve of singular points "
@@ -281,7 +318,7 @@ def classify(surface: "Surface | str", point: Sequence[float]) -> SingularityTyp
         note = (f"the 3-jet has a double line and the polar invariant vanishes to order {N}: "
                 f"a curve of singular points (D_inf) or D_k with k > {N + 1}")
     return SingularityType(name="non-simple", real_form=None, milnor=None, branches=None,
-                           axis=None, note=note, **common)
+                           axis=None, note=note, **common), Frame(**frame)
 
 
 def _as_point(point) -> np.ndarray:
@@ -307,9 +344,11 @@ def _check_singular(s: Surface, p: np.ndarray, T: np.ndarray, S: float) -> None:
     eps = np.finfo(float).eps
     value = float(T[0, 0, 0])
     grad = np.array([T[_unit(a)] for a in range(3)])
-    # Rounding error of evaluating F and its gradient at p.
-    round_v = ZERO_ULPS * eps * float(s.magnitude(p))
-    round_g = ZERO_ULPS * eps * max(
+    # Rounding error of evaluating F and its gradient at p, and what the
+    # rounding of the input's own coefficients can make of them.
+    ulps = ZERO_ULPS * eps + INPUT_ROUNDING * s.degree * s.rounding
+    round_v = ulps * float(s.magnitude(p))
+    round_g = ulps * max(
         float(evaluate_tensor(np.abs(g), np.abs(p))) for g in s.gradient_coeffs)
     tol = CLASSIFY_SINGULAR_RTOL * S
     bad = []
@@ -386,8 +425,11 @@ def _corank1(g, mu, vec, tol, common) -> SingularityType | None:
     return _make(name, name + "+-", k, 1, kernel, common)
 
 
-def _corank2(g, mu, tol, N, common) -> SingularityType | None:
-    """Arnold's determinator on the residual g(u, v) (3-jet and beyond)."""
+def _corank2(g, mu, tol, N, common, frame) -> SingularityType | None:
+    """Arnold's determinator on the residual g(u, v) (3-jet and beyond).
+
+    Sets ``frame["kernel"]`` to the (u, v) coordinates the type was read in.
+    """
     a, b, c, d = g[3, 0], g[2, 1], g[1, 2], g[0, 3]   # a u^3 + b u^2 v + c u v^2 + d v^3
     norm = max(abs(a), abs(b), abs(c), abs(d))
     sign_mu = math.copysign(1.0, mu[0])
@@ -398,6 +440,7 @@ def _corank2(g, mu, tol, N, common) -> SingularityType | None:
     # |disc| / norm^3 estimates the distance of the cubic from the cubics
     # with a multiple line, in units of a coefficient: compare with tol.
     if abs(disc) / norm ** 3 > tol:
+        frame["kernel"] = np.eye(2)
         # Three distinct lines: D4.  Three real lines (disc > 0): D4--,
         # three half-cones; one real line: D4+-, one sheet.
         if disc > 0:
@@ -407,11 +450,11 @@ def _corank2(g, mu, tol, N, common) -> SingularityType | None:
     # proportional to L1^2 if the cubic is L1^2 L2.
     hq = np.array([b * b - 3 * a * c, b * c - 9 * a * d, c * c - 3 * b * d])
     if np.max(np.abs(hq)) / norm > tol:
-        return _dk(g, hq, (a, b, c, d), sign_mu, tol, N, common)
-    return _ek(g, (a, b, c, d), sign_mu, tol, common)
+        return _dk(g, hq, (a, b, c, d), sign_mu, tol, N, common, frame)
+    return _ek(g, (a, b, c, d), sign_mu, tol, common, frame)
 
 
-def _dk(g, hq, cubic, sign_mu, tol, N, common) -> SingularityType | None:
+def _dk(g, hq, cubic, sign_mu, tol, N, common, frame) -> SingularityType | None:
     a, b, c, d = cubic
     w, V = np.linalg.eigh(np.array([[hq[0], hq[1] / 2], [hq[1] / 2, hq[2]]]))
     alpha, beta = V[:, int(np.argmax(np.abs(w)))]         # L1 = alpha u + beta v
@@ -426,6 +469,7 @@ def _dk(g, hq, cubic, sign_mu, tol, N, common) -> SingularityType | None:
     p2 = np.array([-beta, alpha])
     p2 /= np.linalg.norm(p2)                             # L1(p2) = 0
     kappa = (alpha * p1[0] + beta * p1[1]) ** 2 * (gamma * p2[0] + delta * p2[1])
+    frame["kernel"] = np.column_stack([p1, p2])
     # (u, v) = X p1 + Y p2: the cubic becomes kappa X^2 Y.
     gt = compose(g, np.zeros(2), np.column_stack([p1, p2]), N)
     e = derivative(gt, 0)                                # g_X
@@ -470,7 +514,7 @@ def _dk(g, hq, cubic, sign_mu, tol, N, common) -> SingularityType | None:
     return _make(name, name + "+-", k, 2, None, common)
 
 
-def _ek(g, cubic, sign_mu, tol, common) -> SingularityType:
+def _ek(g, cubic, sign_mu, tol, common, frame) -> SingularityType:
     a, b, c, d = cubic
     # The cubic is (alpha u + beta v)^3: its triple root is the mean of the
     # roots, -b / (3a) in u / v (or -c / (3d) in v / u), which is accurate
@@ -485,7 +529,8 @@ def _ek(g, cubic, sign_mu, tol, common) -> SingularityType:
     if cn < 0:
         n = -n                                           # cubic = +|cn| X^3
     N = max(5, g.shape[0] - 1)
-    gt = compose(g, np.zeros(2), np.column_stack([n, dvec]), N)
+    frame["kernel"] = np.column_stack([n, dvec])
+    gt = compose(g, np.zeros(2), frame["kernel"], N)
     c04, c13, c05 = gt[0, 4], gt[1, 3], gt[0, 5]
     # Arnold: with 3-jet x^3, the 4-jet x^3 + a y^4 is E6; if a = 0 and the
     # x y^3 coefficient is non-zero, E7; if both vanish, E8 iff y^5 != 0.

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 
@@ -171,10 +172,11 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, sq
             if res is None:
                 continue
             node, t = res
-            near = 1e-6 * np.linalg.norm(b - a)
+            near = tol.NODE_ON_VERTEX * np.linalg.norm(b - a)
             vertex = None
-            # A node on (to rounding) a cycle vertex: the skeleton passes
-            # through that vertex; anchor the spoke there.
+            # A node on (or next to) a cycle vertex: the skeleton passes
+            # through that vertex; anchor the spoke there.  A separate node a
+            # hair away would leave a sliver between the two.
             if np.linalg.norm(node - a) <= near:
                 vertex, node, t = i, a.copy(), 0.0
             elif np.linalg.norm(node - b) <= near:

@@ -5,42 +5,48 @@
    keep a box only while all four may vanish on it.
 2. Gauss-Newton on (F, Fx, Fy, Fz) from every candidate box centre, all at
    once in double precision.
-3. Where the Hessian is degenerate (A2 and beyond, D, E) double precision
-   only fixes the point to about eps**(1/k); those points are refined in
-   multiple precision (mpmath) on the exact sympy polynomial, with a step
-   scaled by the best of 1..8 times the Newton step (the multiplicity of
-   the root along the kernel), which restores fast convergence.
-4. Deduplicate across neighbouring boxes; read the Hessian's rank and
-   signature.
+3. Each distinct end point is classified and, if degenerate (A2 and
+   beyond, D, E: fixed only to about eps**(1/(k+1)) by Newton, and not a
+   singular point at all of a polynomial with rounded coefficients), moved
+   to the centre of its singular point (:mod:`singmesh.skeleton.centre`).
+4. A point is singular when F and grad F vanish there to the precision of
+   the input (:func:`accept_residual`); the centres are deduplicated.
+   Points on a curve of singular points (infinite Milnor number) are not
+   returned as points: the flag says they were seen.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import sympy
 
 from singmesh import tolerances as tol
 from singmesh.boxes.bernstein import bernstein_on_box, split
-from singmesh.surface import VARIABLES, Surface
+from singmesh.surface import Surface
 
+from .centre import centre
+from .classify import NotSingularError
 from .points import SingularPoint
 
 
-def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: int = 4096, polys=None):
+def candidate_boxes(surface: Surface, box: np.ndarray, level: int, polys=None):
     """Boxes at ``level`` on which F, Fx, Fy, Fz (or ``polys``) may all vanish.
+
+    Boxes are refined level by level as stacked arrays, at most
+    ``CANDIDATE_CHUNK`` at a time (a curve of singular points or hundreds
+    of nodes make many), so memory stays bounded and nothing is dropped.
 
     Returns
     -------
-    lo, hi : (K, 3) ndarrays, the boxes' corners
-    overflow : bool
-        True when the candidates grew past ``max_boxes`` (a curve of
-        singular points, not isolated ones); the search stopped there.
+    lo, hi : (K, 3) ndarrays, the boxes' corners, sorted
     """
     if polys is None:
         polys = [surface.coeffs, *surface.gradient_coeffs]
     stacks = [bernstein_on_box(p, box)[None] for p in polys]
-    corner = np.zeros((1, 3), np.int64)
-    for lvl in range(level + 1):
+    todo = [(stacks, np.zeros((1, 3), np.int64), 0)]
+    out = []
+    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+    while todo:
+        stacks, corner, lvl = todo.pop()
         keep = np.ones(len(corner), bool)
         for s in stacks:
             flat = s.reshape(len(s), -1)
@@ -50,14 +56,20 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, max_boxes: in
             keep &= (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
         stacks = [s[keep] for s in stacks]
         corner = corner[keep]
-        if lvl == level or len(corner) == 0:
-            break
-        if len(corner) > max_boxes:
-            return _corners(box, corner, lvl), True
-        stacks = [split(s).reshape((-1,) + s.shape[1:]) for s in stacks]
-        offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
-        corner = (2 * corner[:, None, :] + offsets[None]).reshape(-1, 3)
-    return _corners(box, corner, level), False
+        if len(corner) == 0:
+            continue
+        if lvl == level:
+            out.append(corner)
+            continue
+        for part in range(0, len(corner), tol.CANDIDATE_CHUNK):
+            sl = slice(part, part + tol.CANDIDATE_CHUNK)
+            children = [split(s[sl]).reshape((-1,) + s.shape[1:]) for s in stacks]
+            todo.append((children, (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
+    if not out:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    corner = np.concatenate(out)
+    corner = corner[np.lexsort(corner.T[::-1])]
+    return _corners(box, corner, level)
 
 
 def _corners(box, corner, level):
@@ -88,70 +100,14 @@ def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
     return np.maximum(f, g) / scale
 
 
-def hessian_signature(h: np.ndarray, scale: float) -> tuple[int, int, int]:
-    """(positive, negative, zero) eigenvalues; zero means below
-    ``HESSIAN_RANK`` times ``scale`` (the size of F's second derivatives)."""
-    w = np.linalg.eigvalsh(0.5 * (h + h.T))
-    cut = tol.HESSIAN_RANK * max(scale, 1e-300)
-    return int((w > cut).sum()), int((w < -cut).sum()), int((np.abs(w) <= cut).sum())
+def accept_residual(surface: Surface) -> float:
+    """The relative residual (:func:`residual`) below which a point is singular.
 
-
-# Tried in this order; the search stops at the first group that improves.
-_STEP_GROUPS = ((1, 2, 3, 4, 5, 6, 7, 8), (0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256))
-
-
-class _MultiPrecision:
-    """grad F and the Hessian of the exact polynomial, in mpmath."""
-
-    def __init__(self, surface: Surface, dps: int):
-        import mpmath
-
-        self.mp = mpmath.mp.clone() if hasattr(mpmath.mp, "clone") else mpmath.mp
-        self.dps = dps
-        grad = [sympy.diff(surface.expr, v) for v in VARIABLES]
-        hess = [[sympy.diff(g, v) for v in VARIABLES] for g in grad]
-        self.grad = sympy.lambdify(VARIABLES, grad, modules="mpmath")
-        self.hess = sympy.lambdify(VARIABLES, hess, modules="mpmath")
-
-    def refine(self, x0: np.ndarray, iterations: int = 200) -> np.ndarray:
-        import mpmath
-
-        with mpmath.workdps(self.dps):
-            x = mpmath.matrix([mpmath.mpf(float(c)) for c in x0])
-            norm = lambda v: mpmath.sqrt(sum(c * c for c in v))  # noqa: E731
-            g = mpmath.matrix(self.grad(*x))
-            for _ in range(iterations):
-                h = mpmath.matrix(self.hess(*x))
-                u, s, v = mpmath.svd_r(h)
-                smax = max(s)
-                if smax == 0:
-                    break
-                # Pseudo-inverse step, ignoring directions the Hessian does
-                # not see at this precision.
-                # Near an A_k point the kernel eigenvalue is ~t^(k-1): keep it
-                # down to what the working precision can still resolve.
-                cut = smax * mpmath.mpf(10) ** (-(self.dps - 10))
-                coeff = [(u[:, i].T * g)[0] / s[i] if s[i] > cut else 0 for i in range(3)]
-                step = sum((v[i, :].T * coeff[i] for i in range(3)), mpmath.matrix(3, 1))
-                best, best_x, best_g = norm(g), None, None
-                # Along the kernel of an A_k point, grad F ~ t^k and the
-                # Newton step is t/k: try multiples of it; where the
-                # Jacobian is nearly singular it may overshoot: try halves.
-                for group in _STEP_GROUPS:
-                    for m in group:
-                        xt = x - m * step
-                        gt = mpmath.matrix(self.grad(*xt))
-                        if norm(gt) < best:
-                            best, best_x, best_g = norm(gt), xt, gt
-                    if best_x is not None:
-                        break
-                if best_x is None:
-                    break
-                moved = norm(best_x - x)
-                x, g = best_x, best_g
-                if moved < mpmath.mpf(10) ** (-self.dps + 10):
-                    break
-            return np.array([float(c) for c in x])
+    ``SINGULAR_RESIDUAL`` for exact input; for rounded coefficients what
+    their rounding allows (``INPUT_ROUNDING * degree * rounding``): a point
+    singular to the precision of the input is singular.
+    """
+    return max(tol.SINGULAR_RESIDUAL, tol.INPUT_ROUNDING * surface.degree * surface.rounding)
 
 
 def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[SingularPoint], bool]:
@@ -166,68 +122,66 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
 
     Returns
     -------
-    points : list of SingularPoint, sorted by coordinates
-    overflow : bool
-        True when the candidates look like a curve of singular points
-        (non-isolated singularities); the points found are then partial.
+    points : list of SingularPoint, sorted by coordinates, classified
+    not_isolated : bool
+        True when some candidates lie on a curve of singular points (the
+        classifier finds an infinite Milnor number there); those are not
+        in ``points``.
     """
     box = np.asarray(box, dtype=float)
-    (lo, hi), overflow = candidate_boxes(surface, box, level)
+    lo, hi = candidate_boxes(surface, box, level)
     if len(lo) == 0:
-        return [], overflow
+        return [], False
 
     x = gauss_newton(surface, (lo + hi) / 2)
     size = box[:, 1] - box[:, 0]
     margin = 1e-9 * size
     inside = np.all((x >= box[:, 0] - margin) & (x <= box[:, 1] + margin), axis=1)
     # Accept loosely first: degenerate points are only fixed to ~eps^(1/k)
-    # in double precision.  The multiple-precision pass decides.
+    # in double precision, and centring decides.
     near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
-    ok = inside & near_cell & np.isfinite(x).all(axis=1) & (residual(surface, x) < tol.SINGULAR_LOOSE)
-    # Double precision scatters the candidates of one degenerate point over
-    # about eps^(1/k): one representative per cluster of candidates within
-    # two candidate boxes (the best residual) is refined, not every one.
+    ok = inside & near_cell & np.isfinite(x).all(axis=1)
+    ok[ok] = residual(surface, x[ok]) < tol.SINGULAR_LOOSE
     x = x[ok]
-    x, spans = _dedupe(x, 2.0 * float(np.max(hi[0] - lo[0])), key=residual(surface, x), spans=True)
-    # A cluster spreading over many candidate boxes is a curve of singular
-    # points (cross-cap, Whitney umbrella): not meshed as a point.
-    curve = spans > 8.0 * float(np.max(hi[0] - lo[0]))
-    overflow = overflow or bool(curve.any())
-    x = x[~curve]
-    hscale = max(max(np.abs(c).max() for row in surface.hessian_coeffs for c in row), 1e-300)
-    mp = None
-    out = []
-    refined = 0
-    for p in x:
-        h = surface.hessian(p)
-        sig = hessian_signature(h, hscale)
-        w = np.abs(np.linalg.eigvalsh(0.5 * (h + h.T)))
-        # Near-degenerate (or not yet converged) points go to multiple
-        # precision: at a point off by 1e-8 a degenerate Hessian can look
-        # regular at the rank tolerance.
-        if w.min() < tol.SINGULAR_REFINE * max(w.max(), 1e-300) or residual(surface, p) > tol.SINGULAR_RESIDUAL:
-            if refined >= tol.SINGULAR_MAX_REFINE:
-                # So many degenerate candidates are a curve of singular
-                # points, not isolated ones: stop, and say so.
-                overflow = True
+    if len(x) == 0:
+        return [], False
+    # One start per distinct end point (to the merge distance), best first.
+    res = residual(surface, x)
+    x = _dedupe(x, tol.SINGULAR_MERGE * size.max(), key=res)
+    x = x[np.lexsort((x[:, 2], x[:, 1], x[:, 0], residual(surface, x)))]
+    cell = float(np.max(hi[0] - lo[0]))
+    limit = accept_residual(surface)
+    found: list[SingularPoint] = []
+    regions: list[tuple[np.ndarray, float]] = []   # centres and the radius their starts fall in
+    curve = False
+    with np.errstate(all="ignore"):
+        for p in x:
+            if any(np.linalg.norm(p - c) <= r for c, r in regions):
+                continue  # another start in the region of a point already centred
+            try:
+                q, kind, _ = centre(surface, p, reach=2.0 * cell)
+            except NotSingularError:
+                continue  # singular only to the loose test
+            if kind.name == "non-simple" and "curve of singular points" in kind.note:
+                curve = True
+                regions.append((q, 2.0 * cell))
                 continue
-            refined += 1
-            mp = mp or _MultiPrecision(surface, tol.SINGULAR_DPS)
-            p = mp.refine(p)
-            h = surface.hessian(p)
-            sig = hessian_signature(h, hscale)
-        res = float(residual(surface, p))
-        if res > tol.SINGULAR_RESIDUAL:
-            continue
-        if not np.all((p >= box[:, 0] - margin) & (p <= box[:, 1] + margin)):
-            continue
-        out.append(SingularPoint(point=p, residual=res, hessian_rank=3 - sig[2], signature=sig))
-    pts = _dedupe(np.array([s.point for s in out]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
-    keep = []
-    for q in pts:
-        keep.append(min(out, key=lambda s: np.linalg.norm(s.point - q)))
+            if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
+                continue
+            r = float(residual(surface, q))
+            if r > limit:
+                continue
+            # Starts of a degenerate point spread over its region (up to
+            # ~eps^(1/(k+1))): those closer than a few times this one's
+            # distance centre to the same point.
+            reach = 4.0 * float(np.linalg.norm(q - p)) if (kind.milnor or 0) > 1 else 0.0
+            regions.append((q, max(reach, tol.SINGULAR_MERGE * size.max())))
+            found.append(SingularPoint(point=q, residual=r, hessian_rank=3 - kind.corank,
+                                       signature=kind.hessian_signature, classification=kind))
+    pts = _dedupe(np.array([s.point for s in found]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
+    keep = [min(found, key=lambda s: np.linalg.norm(s.point - q)) for q in pts]
     keep.sort(key=lambda s: tuple(s.point))
-    return keep, overflow
+    return keep, curve
 
 
 def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: bool = False):
@@ -279,8 +233,8 @@ def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, n
     size = box[:, 1] - box[:, 0]
     found, pairs = [], []
     for a, b in ((0, 1), (0, 2), (1, 2)):
-        (lo, hi), overflow = candidate_boxes(surface, box, level, polys=[surface.coeffs, grads[a], grads[b]])
-        if overflow or len(lo) == 0:
+        lo, hi = candidate_boxes(surface, box, level, polys=[surface.coeffs, grads[a], grads[b]])
+        if len(lo) > tol.SKELETON_NODE_MAX or len(lo) == 0:
             continue  # a whole curve of them (e.g. a surface of revolution): not points
         x = (lo + hi) / 2
         live = np.ones(len(x), bool)

@@ -221,7 +221,8 @@ def substitute(T: np.ndarray, phis: Sequence[np.ndarray], N: int) -> np.ndarray:
     return truncate(acc, N, m)
 
 
-def split(G: np.ndarray, m: int, mu: Sequence[float], N: int) -> tuple[np.ndarray, list[np.ndarray]]:
+def split(G: np.ndarray, m: int, mu: Sequence[float], N: int,
+          critical: bool = True) -> tuple[np.ndarray, list[np.ndarray]]:
     """Splitting lemma: the residual function of the kernel variables.
 
     Parameters
@@ -238,6 +239,12 @@ def split(G: np.ndarray, m: int, mu: Sequence[float], N: int) -> tuple[np.ndarra
         The non-zero Hessian eigenvalues, in the order of the w-axes.
     N : int
         Truncation order.
+    critical : bool
+        False: keep the terms of degree <= 2 as they are (the point is
+        near, not at, the singular point).  ``g`` is then F along the polar
+        set ``dG/dw = 0`` with all its low-order terms (the unfolding that
+        :mod:`singmesh.skeleton.centre` removes), and ``phi`` may have a
+        small constant term.
 
     Returns
     -------
@@ -250,11 +257,12 @@ def split(G: np.ndarray, m: int, mu: Sequence[float], N: int) -> tuple[np.ndarra
     r = 3 - m
     G = truncate(G, N)
     deg = degree_grid(3, N)
-    G[deg <= 2] = 0.0
-    for i in range(r):
-        idx = [0, 0, 0]
-        idx[m + i] = 2
-        G[tuple(idx)] = mu[i] / 2.0
+    if critical:
+        G[deg <= 2] = 0.0
+        for i in range(r):
+            idx = [0, 0, 0]
+            idx[m + i] = 2
+            G[tuple(idx)] = mu[i] / 2.0
     grads = [derivative(G, m + i) for i in range(r)]
     phis = [np.zeros((N + 1,) * m) for _ in range(r)]
     # Fixed point phi <- phi - dG/dw(t, phi) / mu.  dG/dw = mu w + (terms of
@@ -268,9 +276,10 @@ def split(G: np.ndarray, m: int, mu: Sequence[float], N: int) -> tuple[np.ndarra
         if change == 0.0:
             break
     g = substitute(G, phis, N)
-    # The residual has no terms below degree 3 (phi = O(t^2)); clear the
-    # rounding dust so that later order tests see exact zeros there.
-    g[degree_grid(m, N) <= 2] = 0.0
+    if critical:
+        # The residual has no terms below degree 3 (phi = O(t^2)); clear the
+        # rounding dust so that later order tests see exact zeros there.
+        g[degree_grid(m, N) <= 2] = 0.0
     return g, phis
 
 
