@@ -254,18 +254,8 @@ def compute_events(surface, tree: Octree) -> Events:
 
 
 def _zero_lattice_points(surface, tree, corners, uniq):
-    """(line, position) of every leaf corner where F is zero, on each line through it.
-
-    Zero to rounding, or closer to the surface than ``SNAP_DISTANCE`` of the
-    box: the roots of the lines through such a corner would be separate
-    vertices a few 1e-12 apart, making zero-area triangles.  They become
-    one vertex there (placed on the surface by :func:`_onto_surface`).
-    """
-    points = tree.lattice_to_space(_corner_xyz(corners))
-    zero = surface.is_zero(points)
-    size = float(np.max(tree.box[:, 1] - tree.box[:, 0]))
-    slope = np.linalg.norm(surface.gradient(points), axis=1)
-    zero |= np.abs(surface(points)) <= tol.SNAP_DISTANCE * size * slope
+    """(line, position) of every leaf corner where F is zero, on each line through it."""
+    zero = surface.is_zero(tree.lattice_to_space(_corner_xyz(corners)))
     xyz = _corner_xyz(corners[zero])
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
@@ -296,10 +286,7 @@ def _cluster(line_of, pos, snap, lines, tree):
     if len(pos) == 0:
         return line_of, pos, snap
     length = np.float64(1 << tree.fine_level)
-    # In lattice units; a root as close to a (near-)zero lattice point as
-    # SNAP_DISTANCE is merged into it.
-    snap_cells = 2.0 * tol.SNAP_DISTANCE * float(np.max((tree.box[:, 1] - tree.box[:, 0]) / tree.cell))
-    close = (np.diff(line_of) == 0) & (np.diff(pos) <= max(tol.ROOT_CLUSTER * length, tol.SNAP_LATTICE, snap_cells))
+    close = (np.diff(line_of) == 0) & (np.diff(pos) <= max(tol.ROOT_CLUSTER * length, tol.SNAP_LATTICE))
     group = np.concatenate([[0], np.cumsum(~close)])
     n = group[-1] + 1
     g_line = np.zeros(n, np.int64)
@@ -356,24 +343,52 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
     xyz[r, (ln[:, 0] + 1) % 3] = ln[:, 1]
     xyz[r, (ln[:, 0] + 2) % 3] = ln[:, 2]
     point = tree.lattice_to_space(xyz)
-    point[ev_snap] = _onto_surface(surface, point[ev_snap])
+    # A root within SNAP_DISTANCE (of the box) of a lattice point: the
+    # roots of the other lines through that point are as close; apart,
+    # they would be vertices 1e-11 apart with zero-area slivers between
+    # (a thin cusp, a sheet grazing a lattice point).  They share the
+    # point's key and one position, the lattice point moved onto the
+    # surface.  The events keep their places on their lines (and so
+    # their segments): only the vertex is shared.
+    lattice = np.rint(xyz)
+    size = float(np.max(tree.box[:, 1] - tree.box[:, 0]))
+    near = np.nonzero(~ev_snap & (np.abs(ev_pos - np.rint(ev_pos)) * tree.cell[ln[:, 0]]
+                                  <= tol.SNAP_DISTANCE * size))[0]
+    top = 1 << tree.fine_level
+    free = (lattice[near] > 0) & (lattice[near] < top)   # axes along which the point may move
+    q, ok = _onto_surface(surface, tree.lattice_to_space(lattice[near]), free, 4 * tol.SNAP_DISTANCE * size)
+    near = near[ok]
+    point[near] = q[ok]
     m = (1 << tree.fine_level) + 1
-    lattice_key = (np.rint(xyz[:, 0]).astype(np.int64) * m + np.rint(xyz[:, 1]).astype(np.int64)) * m \
-        + np.rint(xyz[:, 2]).astype(np.int64)
-    key = np.where(ev_snap, lattice_key, m ** 3 + idx)
+    lattice_key = (lattice[:, 0].astype(np.int64) * m + lattice[:, 1].astype(np.int64)) * m \
+        + lattice[:, 2].astype(np.int64)
+    shared = ev_snap.copy()
+    shared[near] = True
+    key = np.where(shared, lattice_key, m ** 3 + idx)
     return Events(line=ev_line, pos=ev_pos, side=side, snapped=ev_snap, direction=direction,
                   key=key, point=point, cell_key=cell_key, lines=lines, line_keys=uniq)
 
 
-def _onto_surface(surface, points: np.ndarray) -> np.ndarray:
-    """Lattice points within ``SNAP_DISTANCE`` of the surface moved onto it (Newton along grad F)."""
-    for _ in range(2):
-        f = surface(points)
-        g = surface.gradient(points)
+def _onto_surface(surface, points: np.ndarray, free: np.ndarray, reach: float):
+    """Lattice points moved onto the surface, along the axes they are free to move.
+
+    A point on a face (edge) of the domain moves in that face (along that
+    edge), so that it stays on the domain's boundary; a corner cannot move.
+    Newton steps along the free part of grad F.
+
+    Returns
+    -------
+    points : (K, 3)
+    ok : (K,) bool   the point reached the surface within ``reach``
+    """
+    start = points.copy()
+    for _ in range(3):
+        g = surface.gradient(points) * free
         gg = np.einsum("ij,ij->i", g, g)
-        step = np.where(gg > 0, f / np.where(gg > 0, gg, 1.0), 0.0)
+        step = np.where(gg > 0, surface(points) / np.where(gg > 0, gg, 1.0), 0.0)
         points = points - step[:, None] * g
-    return points
+    ok = surface.is_zero(points) & (np.linalg.norm(points - start, axis=1) <= reach)
+    return points, ok
 
 
 def _signs(surface, tree, lines_rows, pos):

@@ -115,30 +115,42 @@ class Octree:
         return found
 
 
-def star(tree: Octree, point: np.ndarray, rel: float = 1e-9) -> np.ndarray:
-    """Leaves whose closed box contains ``point`` (1 to 8 of them, sorted).
+def containing_leaves(tree: Octree, points: np.ndarray, rel: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Leaves whose closed box contains each point (1 to 8 per point).
 
     A point on a face, edge or corner shared by several leaves gets all of
-    them, so that the point lies strictly inside their union.
+    them, so that it lies strictly inside their union.  All points at once:
+    eight probes around each, looked up level by level in the sorted keys.
+
+    Returns
+    -------
+    point, leaf : (K,) int64 pairs, sorted, without repeats
     """
-    lattice = (np.asarray(point, float) - tree.box[:, 0]) / tree.cell
+    points = np.asarray(points, float).reshape(-1, 3)
+    lattice = (points - tree.box[:, 0]) / tree.cell
     offsets = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1], indexing="ij")).reshape(3, -1).T
-    probes = lattice[None, :] + rel * offsets
+    probes = (lattice[:, None, :] + rel * offsets[None]).reshape(-1, 3)
+    owner = np.repeat(np.arange(len(points)), 8)
+    top = 1 << tree.fine_level
+    inside = ((probes >= 0) & (probes < top)).all(axis=1)
+    probes, owner = probes[inside], owner[inside]
     keys = tree.leaf_keys()
     order = np.argsort(keys)
-    found = set()
-    top = 1 << tree.fine_level
-    for q in probes:
-        if (q < 0).any() or (q >= top).any():
-            continue
-        for lvl in np.unique(tree.level):
-            cell = np.floor(q / (1 << (tree.fine_level - int(lvl)))).astype(np.int64)
-            key = node_keys(np.array(lvl), cell)
-            pos = np.searchsorted(keys[order], key)
-            if pos < len(keys) and keys[order][pos] == key:
-                found.add(int(order[pos]))
-                break
-    return np.array(sorted(found), dtype=np.int64)
+    sorted_keys = keys[order]
+    found = np.full(len(probes), -1, np.int64)
+    for lvl in np.unique(tree.level).tolist():
+        cell = np.floor(probes / (1 << (tree.fine_level - lvl))).astype(np.int64)
+        q = node_keys(np.full(len(cell), lvl), cell)
+        pos = np.minimum(np.searchsorted(sorted_keys, q), max(len(sorted_keys) - 1, 0))
+        hit = (found < 0) & (len(sorted_keys) > 0) & (sorted_keys[pos] == q)
+        found[hit] = order[pos[hit]]
+    pairs = np.unique(np.stack([owner[found >= 0], found[found >= 0]], axis=1), axis=0)
+    return pairs[:, 0], pairs[:, 1]
+
+
+def star(tree: Octree, point: np.ndarray, rel: float = 1e-9) -> np.ndarray:
+    """Leaves whose closed box contains ``point`` (1 to 8 of them, sorted)."""
+    return containing_leaves(tree, point, rel)[1]
 
 
 def empty_boxes(tensors: np.ndarray) -> np.ndarray:
@@ -190,8 +202,98 @@ def _meets_any(box, fine_level, level, corner, regions, rel=1e-9):
     return meets.all(axis=2).any(axis=1)
 
 
+def _inside_any(box, fine_level, level, corner, regions, rel=1e-9):
+    """Whether each box lies inside one of ``regions`` (closed, slightly widened)."""
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    size = 1 << (fine_level - level)
+    lo = box[:, 0] + corner * cell
+    hi = lo + size * cell
+    pad = rel * size * cell
+    inside = ((lo + pad)[:, None, :] >= regions[None, :, 0, :]) & ((hi - pad)[:, None, :] <= regions[None, :, 1, :])
+    return inside.all(axis=2).any(axis=1)
+
+
+def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None):
+    """Subdivide boxes level by level from ``frontier`` [(level, tensors, corners), ...].
+
+    Returns the leaves (lists of tensors, corners, levels, simple flags) and
+    the keys of the nodes split, in the form :func:`subdivide` assembles.
+    """
+    leaves_t, leaves_c, leaves_l, leaves_s, internal = [], [], [], [], []
+    start = {lvl: (t, c) for lvl, t, c in frontier}
+    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+    tensors = corner = None
+    for level in range(min(start), fine_level + 1):
+        if level in start:
+            t, c = start[level]
+            tensors = t if tensors is None else np.concatenate([tensors, t])
+            corner = c if corner is None else np.concatenate([corner, c])
+        if tensors is None:
+            continue
+        keep = ~empty_boxes(tensors)
+        tensors, corner = tensors[keep], corner[keep]
+        if level >= coarse_level:
+            simple = monotone_axis(tensors) >= 0
+            if keep_splitting is not None and len(keep_splitting):
+                simple &= ~_meets_any(box, fine_level, level, corner, keep_splitting)
+            in_star = np.zeros(len(corner), bool)
+            if stars is not None and len(stars):
+                in_star = _inside_any(box, fine_level, level, corner, stars)
+                simple &= ~in_star & ~_meets_any(box, fine_level, level, corner, stars)
+            stop = simple | in_star | (level == fine_level)
+            leaves_t.append(tensors[stop])
+            leaves_c.append(corner[stop])
+            leaves_l.append(np.full(int(stop.sum()), level, dtype=np.int64))
+            leaves_s.append(simple[stop])
+            tensors, corner = tensors[~stop], corner[~stop]
+        if level == fine_level or (len(tensors) == 0 and not any(k > level for k in start)):
+            break
+        half = 1 << (fine_level - level - 1)
+        internal.append(node_keys(np.full(len(corner), level), corner >> (fine_level - level)))
+        tensors = split(tensors).reshape((-1,) + tensors.shape[1:])
+        corner = (corner[:, None, :] + half * offsets[None]).reshape(-1, 3)
+    return leaves_t, leaves_c, leaves_l, leaves_s, internal
+
+
+def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
+    """``tree`` with the leaves meeting the star regions split to the fine level.
+
+    Leaves inside a star and leaves away from all stars stay as they are
+    (what :func:`subdivide` would make of them again); only those meeting
+    a star's boundary are split, from their own tensors, so that the star's
+    boundary is tiled by fine faces.  Inside leaves are flagged not simple.
+    """
+    if stars is None or len(stars) == 0:
+        return tree
+    inside = np.zeros(len(tree.level), bool)
+    touch = np.zeros(len(tree.level), bool)
+    for lvl in np.unique(tree.level).tolist():
+        sel = np.nonzero(tree.level == lvl)[0]
+        inside[sel] = _inside_any(tree.box, tree.fine_level, lvl, tree.corner[sel], stars)
+        touch[sel] = _meets_any(tree.box, tree.fine_level, lvl, tree.corner[sel], stars)
+    grow = touch & ~inside & (tree.level < tree.fine_level)
+    if not grow.any():
+        simple = tree.simple & ~inside
+        return Octree(tree.box, tree.fine_level, tree.level, tree.corner, tree.tensors, simple, tree.internal)
+    frontier = [(lvl, tree.tensors[grow & (tree.level == lvl)], tree.corner[grow & (tree.level == lvl)])
+                for lvl in np.unique(tree.level[grow]).tolist()]
+    # Split what is grown (its own level is below the coarse level only if
+    # the tree was never subdivided there: no such leaves exist).
+    new_t, new_c, new_l, new_s, internal = _grow(frontier, tree.box, 0, tree.fine_level, stars=stars)
+    stay = ~grow
+    return Octree(
+        box=tree.box,
+        fine_level=tree.fine_level,
+        level=np.concatenate([tree.level[stay]] + new_l),
+        corner=np.concatenate([tree.corner[stay]] + new_c),
+        tensors=np.concatenate([tree.tensors[stay]] + new_t),
+        simple=np.concatenate([tree.simple[stay] & ~inside[stay]] + new_s),
+        internal=np.sort(np.concatenate([tree.internal] + internal)),
+    )
+
+
 def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
-              keep_splitting: np.ndarray | None = None) -> Octree:
+              keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None) -> Octree:
     """Subdivide ``box`` for the polynomial with monomial tensor ``coeffs``.
 
     Every box is split down to ``coarse_level``; below it only boxes that
@@ -208,37 +310,21 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
         Regions (lo, hi corners in space) whose boxes are split down to the
         fine level whatever the test says: the cubes around singular
         points, which are then tiled exactly by leaves of the finest size.
+    stars : (k, 2, 3) ndarray, optional
+        Lattice-aligned regions meshed as one box each (the stars of
+        singular points): a box inside one is a leaf at once (not simple,
+        never split), boxes meeting one are split to the fine level, so
+        that its boundary is tiled by fine faces and nothing is spent on
+        its inside.
 
     Returns
     -------
     Octree
     """
     box = np.asarray(box, dtype=float)
-    tensors = bernstein_on_box(coeffs, box)[None]
-    corner = np.zeros((1, 3), dtype=np.int64)
-    leaves_t, leaves_c, leaves_l, leaves_s = [], [], [], []
-    internal = []
-    for level in range(fine_level + 1):
-        keep = ~empty_boxes(tensors)
-        tensors, corner = tensors[keep], corner[keep]
-        if level >= coarse_level:
-            simple = monotone_axis(tensors) >= 0
-            if keep_splitting is not None and len(keep_splitting):
-                simple &= ~_meets_any(box, fine_level, level, corner, keep_splitting)
-            stop = simple | (level == fine_level)
-            leaves_t.append(tensors[stop])
-            leaves_c.append(corner[stop])
-            leaves_l.append(np.full(int(stop.sum()), level, dtype=np.int64))
-            leaves_s.append(simple[stop])
-            tensors, corner = tensors[~stop], corner[~stop]
-        if level == fine_level or len(tensors) == 0:
-            break
-        half = 1 << (fine_level - level - 1)
-        internal.append(node_keys(np.full(len(corner), level), corner >> (fine_level - level)))
-        children = split(tensors)
-        tensors = children.reshape((-1,) + tensors.shape[1:])
-        offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
-        corner = (corner[:, None, :] + half * offsets[None]).reshape(-1, 3)
+    frontier = [(0, bernstein_on_box(coeffs, box)[None], np.zeros((1, 3), dtype=np.int64))]
+    leaves_t, leaves_c, leaves_l, leaves_s, internal = _grow(
+        frontier, box, coarse_level, fine_level, keep_splitting, stars)
     shape = (0,) + tuple(s for s in coeffs.shape)
     cat = lambda parts, empty: np.concatenate(parts) if parts else empty  # noqa: E731
     return Octree(

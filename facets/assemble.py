@@ -61,6 +61,76 @@ def clean_polygons(offsets: np.ndarray, ids: np.ndarray):
             np.concatenate([np.asarray(x, np.int64) for x in src]))
 
 
+def stitch_collinear(offsets: np.ndarray, ids: np.ndarray, src: np.ndarray, vertices: np.ndarray):
+    """Remove polygons whose vertices lie on one line, mending their neighbours.
+
+    Such a polygon is a sliver of F + eps of infinitesimal width along a
+    line that lies in the surface (a lattice line in a plane or a ruled
+    surface, on a box centred on it).  Its two sides are two chains between
+    the same end points, one with the lattice points of finer neighbours
+    on it, one without: the polygons across those links see different
+    vertices on one segment.  The sliver goes, and every other polygon
+    edge joining two of its vertices with others of them in between gets
+    those in between (no T-junction, no zero-area triangle).
+
+    Returns
+    -------
+    offsets, ids, src : as from :func:`clean_polygons`
+    """
+    n_poly = len(offsets) - 1
+    if n_poly == 0:
+        return offsets, ids, src
+    poly_of = np.repeat(np.arange(n_poly), np.diff(offsets))
+    p = vertices[ids]
+    first = p[offsets[:-1]][poly_of]
+    d2 = np.sum((p - first) ** 2, axis=1)
+    far = np.zeros(n_poly, np.int64)
+    # The vertex farthest from the first one: the line's other end.
+    order = np.lexsort((d2, poly_of))
+    far[poly_of[order]] = order
+    axis = p[far][poly_of] - first
+    length = np.linalg.norm(axis, axis=1)
+    off = np.linalg.norm(np.cross(p - first, axis), axis=1) / np.maximum(length, 1e-300)
+    worst = np.zeros(n_poly)
+    np.maximum.at(worst, poly_of, off)
+    flat = (worst <= tol.ZERO_AREA * length[offsets[:-1]]) & (np.diff(offsets) >= 3)
+    if not flat.any():
+        return offsets, ids, src
+    between: dict = {}
+    for k in np.nonzero(flat)[0].tolist():
+        chain_ids = ids[offsets[k]:offsets[k + 1]]
+        t = (p[offsets[k]:offsets[k + 1]] - first[offsets[k]]) @ axis[offsets[k]]
+        chain = [int(v) for v in chain_ids[np.argsort(t, kind="stable")]]
+        for i in range(len(chain)):
+            for j in range(i + 2, len(chain)):
+                between[(chain[i], chain[j])] = chain[i + 1:j]
+                between[(chain[j], chain[i])] = chain[i + 1:j][::-1]
+    # Only polygons with an edge to mend go through Python.
+    nxt = np.arange(len(ids)) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    nv = np.int64(len(vertices))
+    edge_keys = ids.astype(np.int64) * nv + ids[nxt]
+    wanted = np.array([u * nv + v for u, v in between], np.int64)
+    touched = np.zeros(n_poly, bool)
+    touched[poly_of[np.isin(edge_keys, wanted)]] = True
+    keep = ~flat & ~touched
+    sizes = [np.diff(offsets)[keep]]
+    flat_ids = [ids[keep[poly_of]]]
+    srcs = [src[keep]]
+    for k in np.nonzero(touched & ~flat)[0].tolist():
+        cyc = [int(v) for v in ids[offsets[k]:offsets[k + 1]]]
+        out = []
+        for i, v in enumerate(cyc):
+            out.append(v)
+            out += between.get((v, cyc[(i + 1) % len(cyc)]), [])
+        sizes.append([len(out)])
+        flat_ids.append(np.asarray(out, np.int64))
+        srcs.append([src[k]])
+    sizes = np.concatenate([np.asarray(x, np.int64) for x in sizes])
+    return (np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(flat_ids),
+            np.concatenate([np.asarray(x, np.int64) for x in srcs]))
+
+
 def _zero_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     p = vertices[faces]
     cross = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
@@ -115,6 +185,7 @@ def assemble(
     first[ids[::-1]] = np.arange(len(keys))[::-1]
     vertices = points[first]
     offsets, poly, src = clean_polygons(offsets, ids)
+    offsets, poly, src = stitch_collinear(offsets, poly, src, vertices)
     normals = gradient(vertices)
     fan = None if apex is None else apex[src]
     faces, extra, _ = triangulate_polygons((offsets, poly), vertices, normals, project, fan)

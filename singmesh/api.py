@@ -6,15 +6,14 @@ import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
-from singmesh.boxes.octree import star, subdivide
+from singmesh.boxes.octree import refine_stars, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
+from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -103,17 +102,27 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=None if overflow else cubes)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
-    if len(points) and not overflow:
-        # Second pass: each star becomes a cube around its point, large
-        # enough to hold the boxes that failed the simplicity test there,
-        # and tiled by fine leaves.
-        cubes = _star_cubes(tree, links, points)
-        tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=cubes)
-        events = compute_events(surf, tree)
-        links = face_links(tree, events)
-
-    group, stars, clashes = _stars(tree, cubes if len(points) and not overflow else None, points)
-    cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
+    centres = np.array([sp.point for sp in points]).reshape(-1, 3)
+    expected = [getattr(sp.classification, "branches", None) for sp in points]
+    cubes = star_cubes(tree, links, centres) if len(points) and not overflow else None
+    first = tree
+    for attempt in range(tol.STAR_RETRIES + 1):
+        if cubes is not None:
+            # Second pass: each star becomes a cube around its point, large
+            # enough to hold the boxes that failed the simplicity test
+            # there; the leaves meeting its boundary go to the fine level.
+            tree = refine_stars(first, cubes)
+            events = compute_events(surf, tree)
+            links = face_links(tree, events)
+        group, stars, clashes = group_stars(tree, cubes, centres)
+        cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
+        # A star too large for the cone over its boundary to be the surface
+        # in it joins branches: fewer link cycles than the classifier's
+        # branches.  Those stars shrink by half and are meshed again.
+        few = _short_stars(cycles, stars, expected)
+        if not few or attempt == tol.STAR_RETRIES:
+            break
+        cubes = shrink_cubes(first, cubes, centres, few)
 
     offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
@@ -136,82 +145,17 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "inconsistent_squares": int(links.inconsistent.sum()),
         "singular_search_time": t_sing,
         "singular_locus_not_isolated": bool(overflow),
-        "overlapping_stars": clashes,
+        "overlapping_stars": len(clashes),
         "time": time.perf_counter() - t0,
     }
     return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
                 skeleton_nodes=nodes, skeleton_node_axes=node_axes)
 
 
-def _star_cubes(tree, links, points) -> np.ndarray:
-    """A lattice cube around each singular point: its star.
-
-    The cube holds the connected set (across shared faces) of leaves that
-    failed the simplicity test grown from the leaves around p, so that
-    every leaf outside it is simple (its surface a union of discs) and the
-    surface inside is the cone over the cycles on the cube's boundary.
-    Overlapping cubes shrink to one fine cell around their points.
-
-    Returns
-    -------
-    (k, 2, 3) ndarray of (lo, hi) corners in space
-    """
-    n = len(tree.level)
-    both = (links.minus >= 0) & (links.plus >= 0)
-    a, b = links.minus[both], links.plus[both]
-    grow = ~tree.simple[a] & ~tree.simple[b]
-    adj = coo_matrix((np.ones(grow.sum()), (a[grow], b[grow])), shape=(n, n))
-    _, label = connected_components(adj, directed=False)
-    top = 1 << tree.fine_level
-    cap = top // 8
-    boxes = []
-    for sp in points:
-        p = (sp.point - tree.box[:, 0]) / tree.cell
-        seeds = star(tree, sp.point)
-        radius = 1.0
-        if len(seeds):
-            region = np.nonzero(np.isin(label, label[seeds]))[0]
-            lo = tree.corner[region].min(axis=0)
-            hi = (tree.corner[region] + tree.size[region][:, None]).max(axis=0)
-            radius = min(max(np.max(p - lo), np.max(hi - p), 1.0), cap)
-        boxes.append([np.clip(np.floor(p - radius), 0, top), np.clip(np.ceil(p + radius), 0, top)])
-    boxes = np.array(boxes, dtype=np.int64).reshape(-1, 2, 3)
-    for i in range(len(boxes)):
-        for j in range(i):
-            if (boxes[i, 0] < boxes[j, 1]).all() and (boxes[j, 0] < boxes[i, 1]).all():
-                for k in (i, j):
-                    p = (points[k].point - tree.box[:, 0]) / tree.cell
-                    boxes[k] = [np.floor(p - 1), np.ceil(p + 1)]
-    return tree.box[:, 0] + boxes * tree.cell
-
-
-def _stars(tree, cubes, points):
-    """Group the leaves of each star cube into one box.
-
-    Returns
-    -------
-    group : (N,) int64    box id of every leaf (N + i for the star of point i)
-    stars : dict          box id -> index of the singular point
-    clashes : int         singular points left without a star (cubes met)
-    """
-    n = len(tree.level)
-    group = np.arange(n, dtype=np.int64)
-    stars, clashes = {}, 0
-    if cubes is None:
-        return group, stars, clashes
-    lo_leaf = tree.lattice_to_space(tree.corner)
-    hi_leaf = tree.lattice_to_space(tree.corner + tree.size[:, None])
-    pad = 1e-9 * tree.cell
-    for i, (lo, hi) in enumerate(cubes):
-        inside = np.nonzero(((lo_leaf >= lo - pad) & (hi_leaf <= hi + pad)).all(axis=1))[0]
-        if len(inside) == 0 or len(star(tree, points[i].point)) == 0:
-            continue  # no surface around it: an isolated real point
-        if (group[inside] >= n).any():
-            clashes += 1
-            continue
-        group[inside] = n + i
-        stars[n + i] = i
-    return group, stars, clashes
+def _short_stars(cycles, stars: dict, expected: list) -> list[int]:
+    """Points whose star has fewer link cycles than the branches they have."""
+    counts = dict(zip(*np.unique(cycles.box, return_counts=True))) if len(cycles) else {}
+    return [i for box, i in stars.items() if expected[i] is not None and counts.get(box, 0) < expected[i]]
 
 
 def _point_key(i: int) -> int:
@@ -230,30 +174,6 @@ def _square_bounds(tree, square):
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
-def _stray_cycles(cycles, events, stars, points) -> np.ndarray:
-    """Cycles on a star's boundary that are not links of its point.
-
-    The classifier knows how many branches meet at the point; a star cube
-    can also cut off a small piece of surface that does not pass through
-    the point (the thin sheet of an E8 or A5 grazing a corner of the cube).
-    Beyond the expected number, the smallest cycles are such pieces: they
-    bound discs and are meshed as plain facets, not fanned into the point.
-    """
-    stray = np.zeros(len(cycles), bool)
-    star_cycles = np.nonzero(np.isin(cycles.box, list(stars)))[0]
-    for box in np.unique(cycles.box[star_cycles]).tolist():
-        kind = points[stars[box]].classification
-        expected = getattr(kind, "branches", None)
-        mine = star_cycles[cycles.box[star_cycles] == box]
-        if expected is None or len(mine) <= expected:
-            continue
-        extent = [np.ptp(events.point[cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]]], axis=0).max()
-                  for c in mine]
-        order = np.argsort(extent, kind="stable")[::-1]
-        stray[mine[order[expected:]]] = True
-    return stray
-
-
 def _polygons(surf, tree, events, links, cycles, stars, points):
     """Facet polygons (offsets, keys, points, apex flags) and branch counts.
 
@@ -262,7 +182,7 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
     """
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
-    plain |= _stray_cycles(cycles, events, stars, points)
+    plain |= stray_cycles(cycles, events, stars, [getattr(sp.classification, "branches", None) for sp in points])
     ev = cycles.events
     owner = np.repeat(np.arange(len(cycles)), sizes)
     keep = plain[owner]

@@ -34,12 +34,13 @@ INPUT_ROUNDING = 8.0
 #: units) to a lattice point at which F is zero *is* that lattice point.
 SNAP_LATTICE = 1e-6
 
-#: A lattice point closer to the surface than this (relative to the box) is
-#: a zero of F: the roots on the lines through it become one vertex, placed
-#: on the surface.  Apart, they would be vertices closer than this to each
-#: other, with slivers of zero area between them (a thin cusp, or a sheet
-#: nearly through a lattice point).
-SNAP_DISTANCE = 2e-9
+#: A root of F on a lattice line closer than this (relative to the box) to a
+#: lattice point shares its vertex with the roots of the other lines through
+#: that point (placed on the surface).  Apart, they would be vertices a hair
+#: apart with triangles of no area between them (a thin cusp, a sheet
+#: grazing a lattice point).  The size of ROOT_CLUSTER, the distance below
+#: which two roots on one line are one vertex already.
+SNAP_DISTANCE = 1e-7
 
 #: Roots of the restriction of F to a lattice line: eigenvalues whose
 #: imaginary part is below this (relative to the line's length scale) are
@@ -66,6 +67,10 @@ SLIVER_AREA = 1e-6
 #: A skeleton curve crossing a star's link cycle within this fraction of
 #: a link's length from one of its ends passes through that vertex.
 NODE_ON_VERTEX = 0.05
+
+#: Times a star with fewer link cycles than its point's branches is halved
+#: and meshed again (its cube was larger than the cone it must hold).
+STAR_RETRIES = 2
 
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
@@ -112,6 +117,12 @@ CLASSIFY_ORDERS = (8, 14, 20)
 #: coefficients of both signs, counting as zero those below this fraction of
 #: the largest (exact zeros at corners come out of the conversion as 1e-17).
 CANDIDATE_SLACK = 1e-12
+
+#: ... and those below this fraction of the largest coefficient on the whole
+#: domain: de Casteljau splits from the domain down leave rounding dust of
+#: that size (64 ulps), which deep boxes can no longer tell from their own
+#: small coefficients.
+CANDIDATE_DUST = 64 * 2.0 ** -52
 
 #: Newton results with a relative residual max(|F|, |grad F|) / size of F's
 #: terms below this are kept for classification and centring (degenerate

@@ -1,8 +1,8 @@
 """Singular points: where F and all three partial derivatives vanish.
 
-1. Candidate boxes: subdivide the domain with the Bernstein forms of F, Fx,
-   Fy and Fz side by side (stacked arrays, whole-level operations) and
-   keep a box only while all four may vanish on it.
+1. Candidate boxes: subdivide the domain with the Bernstein form of F
+   (stacked arrays, whole-level operations; the forms of Fx, Fy, Fz are
+   its differences) and keep a box only while all four may vanish on it.
 2. Gauss-Newton on (F, Fx, Fy, Fz) from every candidate box centre, all at
    once in double precision.
 3. Each distinct end point is classified and, if degenerate (A2 and
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
-from singmesh.boxes.bernstein import bernstein_on_box, split
+from singmesh.boxes.bernstein import bernstein_on_box, derivative, split
 from singmesh.surface import Surface
 
 from .centre import centre
@@ -28,34 +28,39 @@ from .classify import NotSingularError
 from .points import SingularPoint
 
 
-def candidate_boxes(surface: Surface, box: np.ndarray, level: int, polys=None):
-    """Boxes at ``level`` on which F, Fx, Fy, Fz (or ``polys``) may all vanish.
+def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2)):
+    """Boxes at ``level`` on which F and its partial derivatives along ``axes`` may all vanish.
 
-    Boxes are refined level by level as stacked arrays, at most
-    ``CANDIDATE_CHUNK`` at a time (a curve of singular points or hundreds
-    of nodes make many), so memory stays bounded and nothing is dropped.
+    Only F's Bernstein tensors are split: those of its derivatives on the
+    same box are differences of them (up to a positive factor), so the
+    derivatives cost no conversion and no split.  Boxes are refined level
+    by level as stacked arrays, at most ``CANDIDATE_CHUNK`` at a time (a
+    curve of singular points or hundreds of nodes make many), so memory
+    stays bounded and nothing is dropped.
 
     Returns
     -------
     lo, hi : (K, 3) ndarrays, the boxes' corners, sorted
     """
-    if polys is None:
-        polys = [surface.coeffs, *surface.gradient_coeffs]
-    stacks = [bernstein_on_box(p, box)[None] for p in polys]
-    todo = [(stacks, np.zeros((1, 3), np.int64), 0)]
+    root = bernstein_on_box(surface.coeffs, box)[None]
+    # Splitting from the root leaves rounding dust of the root's size on
+    # coefficients that should be exactly zero (at a singular point on a
+    # split plane): tiny next to the box's own coefficients at depth.
+    dust = tol.CANDIDATE_DUST * float(np.abs(root).max())
+    todo = [(root, np.zeros((1, 3), np.int64), 0)]
     out = []
     offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
     while todo:
-        stacks, corner, lvl = todo.pop()
+        t, corner, lvl = todo.pop()
         keep = np.ones(len(corner), bool)
-        for s in stacks:
-            flat = s.reshape(len(s), -1)
+        # A derivative along an axis F does not depend on is zero: no test.
+        for c in [t] + [derivative(t, a) for a in axes if t.shape[1 + a] > 1]:
+            flat = c.reshape(len(c), -1)
             # Exact zeros at box corners come out of the conversion as
             # +-1e-17: allow for the rounding, relative to the coefficients.
-            slack = tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1)
+            slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
             keep &= (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
-        stacks = [s[keep] for s in stacks]
-        corner = corner[keep]
+        t, corner = t[keep], corner[keep]
         if len(corner) == 0:
             continue
         if lvl == level:
@@ -63,8 +68,8 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, polys=None):
             continue
         for part in range(0, len(corner), tol.CANDIDATE_CHUNK):
             sl = slice(part, part + tol.CANDIDATE_CHUNK)
-            children = [split(s[sl]).reshape((-1,) + s.shape[1:]) for s in stacks]
-            todo.append((children, (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
+            todo.append((split(t[sl]).reshape((-1,) + t.shape[1:]),
+                         (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
     if not out:
         return np.zeros((0, 3)), np.zeros((0, 3))
     corner = np.concatenate(out)
@@ -229,11 +234,10 @@ def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, n
     axes : (k, 2) int64, the pair (a, b) of vanishing derivatives
     """
     box = np.asarray(box, dtype=float)
-    grads = surface.gradient_coeffs
     size = box[:, 1] - box[:, 0]
     found, pairs = [], []
     for a, b in ((0, 1), (0, 2), (1, 2)):
-        lo, hi = candidate_boxes(surface, box, level, polys=[surface.coeffs, grads[a], grads[b]])
+        lo, hi = candidate_boxes(surface, box, level, axes=(a, b))
         if len(lo) > tol.SKELETON_NODE_MAX or len(lo) == 0:
             continue  # a whole curve of them (e.g. a surface of revolution): not points
         x = (lo + hi) / 2
