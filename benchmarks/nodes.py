@@ -99,6 +99,36 @@ SURFACES = {
 }
 
 
+#: Surfaces with hundreds of nodes (benchmarks/bench_many_nodes.py), written
+#: from the literature; their node counts inside the box are what
+#: :func:`find_nodes` finds with ``starts`` starting points per axis (the
+#: Barth decic has 345 nodes, 300 of them real in [-2, 2]^3; the Endrass
+#: octic, 144 real affine ones in [-3, 3]^3).
+LARGE = {
+    "barth10": NodalSurface(
+        name="Barth decic",
+        text="8 (x^2-t^4 y^2)(y^2-t^4 z^2)(z^2-t^4 x^2)(x^4+y^4+z^4-2 x^2 y^2-2 x^2 z^2-2 y^2 z^2)"
+             " + (3+5t)(x^2+y^2+z^2-1)^2 (x^2+y^2+z^2-(2-t))^2; t = (1+sqrt(5))/2;",
+        expr=8 * (x**2 - _phi**4 * y**2) * (y**2 - _phi**4 * z**2) * (z**2 - _phi**4 * x**2)
+        * (x**4 + y**4 + z**4 - 2 * x**2 * y**2 - 2 * x**2 * z**2 - 2 * y**2 * z**2)
+        + (3 + 5 * _phi) * (x**2 + y**2 + z**2 - 1) ** 2 * (x**2 + y**2 + z**2 - (2 - _phi)) ** 2,
+        box=((-2.0, 2.0),) * 3,
+        expected=300,
+    ),
+    "endrass": NodalSurface(
+        name="Endrass octic",
+        text="64(x^2-1)(y^2-1)((x+y)^2-2)((x-y)^2-2)"
+             " - (a (x^2+y^2)^2 + (b z^2 + c)(x^2+y^2) - 16 z^4 + d z^2 + f)^2;"
+             " a = -4(1+sqrt(2)); b = 8(2+sqrt(2)); c = 2(2+7sqrt(2)); d = 8(1-2sqrt(2)); f = -(1+12sqrt(2));",
+        expr=64 * (x**2 - 1) * (y**2 - 1) * ((x + y) ** 2 - 2) * ((x - y) ** 2 - 2)
+        - (-4 * (1 + _sqrt2) * (x**2 + y**2) ** 2 + (8 * (2 + _sqrt2) * z**2 + 2 * (2 + 7 * _sqrt2)) * (x**2 + y**2)
+           - 16 * z**4 + 8 * (1 - 2 * _sqrt2) * z**2 - (1 + 12 * _sqrt2)) ** 2,
+        box=((-3.0, 3.0),) * 3,
+        expected=144,
+    ),
+}
+
+
 # ---------------------------------------------------------------- evaluation
 class _Numeric:
     """Vectorised F, grad F and Hessian of a polynomial given by sympy.

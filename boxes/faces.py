@@ -92,9 +92,10 @@ def contact_squares(tree: Octree):
 
 def _face_coefficients(tree: Octree, owner, owner_side, n):
     """Bernstein coefficients of F on squares, axes ordered (u, v)."""
-    t = tree.tensors[owner]
-    face = np.where((owner_side == 1)[:, None, None],
-                    np.take(t, -1, axis=1 + n), np.take(t, 0, axis=1 + n))
+    # Gather the face's slice only, not the owner's whole tensor.
+    index = [owner, slice(None), slice(None), slice(None)]
+    index[1 + n] = np.where(owner_side == 1, tree.tensors.shape[1 + n] - 1, 0)
+    face = tree.tensors[tuple(index)]
     if n == 1:  # the remaining axes are (x, z) = (v, u)
         face = np.swapaxes(face, 1, 2)
     return face

@@ -15,6 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.spatial import cKDTree
 from scipy.sparse.csgraph import connected_components
 
+from singmesh import tolerances as tol
 from singmesh.boxes.octree import Octree, containing_leaves
 
 
@@ -22,8 +23,8 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
     """A lattice cube around each singular point: its star.
 
     The cube holds the connected set (across shared faces) of leaves that
-    failed the simplicity test grown from the leaves around p, up to an
-    eighth of the domain and half-way to the nearest other point.  Cubes
+    failed the simplicity test grown from the leaves around p, up to
+    ``STAR_REACH`` of the domain and half-way to the nearest other point.  Cubes
     that still overlap (points a few cells apart) shrink to one fine cell
     around their points.
 
@@ -59,7 +60,7 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
     top = 1 << tree.fine_level
     radius = np.ones(k)
     has = np.bincount(owner, minlength=k) > 0
-    radius[has] = np.clip(np.maximum(np.max(p - lo, axis=1), np.max(hi - p, axis=1))[has], 1.0, top // 8)
+    radius[has] = np.clip(np.maximum(np.max(p - lo, axis=1), np.max(hi - p, axis=1))[has], 1.0, tol.STAR_REACH * top)
     if k > 1:
         # Room between neighbours: a cube reaches at most half-way to the
         # nearest other point (the non-simple regions of nearby nodes join

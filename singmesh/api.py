@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -20,7 +21,7 @@ from singmesh.skeleton.singular import singular_points, skeleton_nodes
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .mesh import Mesh
+from .mesh import Mesh, SingularPointWarning
 from .surface import Surface
 
 DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
@@ -148,8 +149,13 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "overlapping_stars": len(clashes),
         "time": time.perf_counter() - t0,
     }
-    return Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
-                skeleton_nodes=nodes, skeleton_node_axes=node_axes)
+    m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
+             skeleton_nodes=nodes, skeleton_node_axes=node_axes)
+    # Nothing is dropped silently: a point with branches that is not a
+    # vertex, or whose fans differ from its branches, is said aloud.
+    for note in m.singular_point_warnings():
+        warnings.warn(note, SingularPointWarning, stacklevel=2)
+    return m
 
 
 def _short_stars(cycles, stars: dict, expected: list) -> list[int]:

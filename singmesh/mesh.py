@@ -18,6 +18,10 @@ FORMATS = {
 }
 
 
+class SingularPointWarning(UserWarning):
+    """A singular point is not meshed as it is (not a vertex, or wrong branches)."""
+
+
 @dataclass
 class Mesh:
     """A triangle mesh of a surface F = 0 inside a box.
@@ -121,15 +125,41 @@ class Mesh:
         lines += [f"note: {n}" for n in self.notes()]
         return "\n".join(lines)
 
+    def singular_point_warnings(self) -> list[str]:
+        """Singular points the mesh does not show as they are, one line each kind.
+
+        A point whose surface has branches (by its classification) but is
+        not a mesh vertex, and a point whose number of triangle fans differs
+        from its branches, with the reason where it is known.
+        """
+        lost = [s for s in self.singularities
+                if s.vertex is None and (getattr(s.classification, "branches", None) or 0) > 0]
+        wrong = [s for s in self.singularities if s.vertex is not None
+                 and getattr(s.classification, "branches", None) not in (None, s.branches)]
+        out = []
+        if lost:
+            why = []
+            if self.stats.get("singular_locus_not_isolated"):
+                why.append("a curve of singular points in the box (stars are not built)")
+            if self.stats.get("overlapping_stars"):
+                why.append(f"{self.stats['overlapping_stars']} too close to another point to have a star")
+            out.append(f"{len(lost)} of {len(self.singularities)} singular point(s) with branches are not "
+                       f"mesh vertices" + (f" ({'; '.join(why)})" if why else "") + ": "
+                       + ", ".join(s.name + " at (" + ", ".join(f"{c:.6g}" for c in s.point) + ")" for s in lost[:5])
+                       + (" ..." if len(lost) > 5 else ""))
+        if wrong:
+            out.append(f"{len(wrong)} singular point(s) meshed with a number of branches other than their "
+                       "type has: " + ", ".join(f"{s.name} at (" + ", ".join(f"{c:.6g}" for c in s.point)
+                                                + f") {s.branches} instead of {s.classification.branches}"
+                                                for s in wrong[:5]) + (" ..." if len(wrong) > 5 else ""))
+        return out
+
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""
-        out = []
+        out = self.singular_point_warnings()
         if self.stats.get("singular_locus_not_isolated"):
             out.append("F has a curve of singular points in the box (not isolated points); "
                        "such curves are not meshed as singular (unsupported)")
-        if self.stats.get("overlapping_stars"):
-            out.append(f"{self.stats['overlapping_stars']} singular point(s) too close to another "
-                       "to be fanned separately")
         if len(self.faces) == 0:
             if self.singularities:
                 out.append("no triangle: in this box the real surface is only isolated point(s)")

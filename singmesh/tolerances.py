@@ -68,6 +68,13 @@ SLIVER_AREA = 1e-6
 #: a link's length from one of its ends passes through that vertex.
 NODE_ON_VERTEX = 0.05
 
+#: Largest half-side of a star cube, as a fraction of the domain.  A star
+#: holds the leaves near its point that failed the simplicity test (along a
+#: sharp cusp: 14 fine cells for an E8 at 256); on surfaces with long thin
+#: regions those join up far beyond the point, and a cube that large may be
+#: no cone over its boundary (caught by STAR_RETRIES).
+STAR_REACH = 1 / 8
+
 #: Times a star with fewer link cycles than its point's branches is halved
 #: and meshed again (its cube was larger than the cone it must hold).
 STAR_RETRIES = 2

@@ -38,7 +38,7 @@ from numpy.polynomial import polynomial as P
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
-from .classify import Frame, NotSingularError, SingularityType, analyse
+from .classify import Frame, SingularityType, analyse
 from .splitting import compose, derivative, split
 
 #: Derivatives of g (in the frame's kernel coordinates) that vanish at the
@@ -106,7 +106,16 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
     return frame.basis[:, :m] @ uv + frame.basis[:, m:] @ np.asarray(w, dtype=float)
 
 
-def centre(surface: Surface, p: np.ndarray, reach: float) -> tuple[np.ndarray, SingularityType, Frame]:
+def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
+    """max(|F|, |grad F|) relative to the size of F's terms at x."""
+    f = np.abs(surface(x))
+    g = np.abs(surface.gradient(x)).max(axis=-1)
+    scale = np.maximum(surface.magnitude(x), np.abs(surface.coeffs).max())
+    return np.maximum(f, g) / scale
+
+
+def centre(surface: Surface, p: np.ndarray, reach: float,
+           limit: float) -> tuple[np.ndarray, SingularityType, Frame]:
     """The centre of the singular point near ``p``, its type and frame.
 
     Parameters
@@ -117,6 +126,11 @@ def centre(surface: Surface, p: np.ndarray, reach: float) -> tuple[np.ndarray, S
     reach : float
         Largest total move allowed (the search stops short of leaving
         the neighbourhood of ``p``).
+    limit : float
+        Largest relative residual (:func:`residual`)
+        a step may land on: the centre of a degenerate point is singular to
+        the precision of the input, and a node whose small eigenvalue looked
+        like a kernel is left where it is (the step would leave it).
 
     Raises
     ------
@@ -135,12 +149,8 @@ def centre(surface: Surface, p: np.ndarray, reach: float) -> tuple[np.ndarray, S
         if step is None or not np.isfinite(step).all():
             break
         q = p + step
-        if np.linalg.norm(q - start) > reach:
+        if np.linalg.norm(q - start) > reach or float(residual(surface, q[None])[0]) > limit:
             break
-        try:
-            analyse(surface, q)
-        except NotSingularError:
-            break  # a node's small eigenvalue read as zero: the step left it
         p = q
         if np.linalg.norm(step) <= tol.CENTRE_STOP * (1.0 + np.abs(p).max()):
             break

@@ -23,7 +23,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.bernstein import bernstein_on_box, derivative, split
 from singmesh.surface import Surface
 
-from .centre import centre
+from .centre import centre, residual
 from .classify import NotSingularError
 from .points import SingularPoint
 
@@ -97,14 +97,6 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40) -> np.nd
     return x
 
 
-def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
-    """max(|F|, |grad F|) relative to the size of F's terms at x."""
-    f = np.abs(surface(x))
-    g = np.abs(surface.gradient(x)).max(axis=-1)
-    scale = np.maximum(surface.magnitude(x), np.abs(surface.coeffs).max())
-    return np.maximum(f, g) / scale
-
-
 def accept_residual(surface: Surface) -> float:
     """The relative residual (:func:`residual`) below which a point is singular.
 
@@ -164,7 +156,7 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
             if any(np.linalg.norm(p - c) <= r for c, r in regions):
                 continue  # another start in the region of a point already centred
             try:
-                q, kind, _ = centre(surface, p, reach=2.0 * cell)
+                q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit)
             except NotSingularError:
                 continue  # singular only to the loose test
             if kind.name == "non-simple" and "curve of singular points" in kind.note:

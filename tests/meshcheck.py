@@ -128,3 +128,29 @@ def fans_are_closed(faces, vertex: int) -> bool:
                 if w != vertex:
                     c[w] += 1
     return all(n == 2 for n in c.values())
+
+
+def tiny_triangles(vertices, faces, box, rel=1e-14) -> int:
+    """Triangles whose area is at most ``rel`` times the box's largest side squared.
+
+    An absolute test (as viewers, slicers and FEM codes see it): a small
+    but well-shaped triangle of 1e-8 of the box counts too.
+    """
+    faces = np.asarray(faces)
+    if len(faces) == 0:
+        return 0
+    p = np.asarray(vertices)[faces]
+    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    size = np.ptp(np.asarray(box, float), axis=1).max()
+    return int((area <= rel * size * size).sum())
+
+
+def close_vertex_pairs(vertices, box, rel=1e-9) -> int:
+    """Pairs of vertices closer than ``rel`` times the box's largest side."""
+    from scipy.spatial import cKDTree
+
+    v = np.asarray(vertices)
+    if len(v) < 2:
+        return 0
+    size = np.ptp(np.asarray(box, float), axis=1).max()
+    return len(cKDTree(v).query_pairs(rel * size))

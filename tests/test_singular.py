@@ -83,6 +83,9 @@ def check_singular_mesh(m, point, branches, box, f):
     s = found[0]
     assert not mc.non_manifold_edges(m.faces)
     assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(box, float)) == []
+    # Sharp cusps: no triangle of (absolutely) no area, no vertices a hair apart.
+    assert mc.tiny_triangles(m.vertices, m.faces, box) == 0
+    assert mc.close_vertex_pairs(m.vertices, box) == 0
     if branches == 0:
         assert s.vertex is None
         return
