@@ -144,6 +144,12 @@ SINGULAR_RESIDUAL = 1e-12
 #: many at a time (memory: four Bernstein tensors each, 8 children).
 CANDIDATE_CHUNK = 2048
 
+#: Candidate boxes of the singular-point search in a connected clump this
+#: many boxes long may lie on a curve of singular points; CURVE_SAMPLES
+#: boxes spread along it decide (see singular._curve_chains).
+CURVE_SPAN = 8
+CURVE_SAMPLES = 9
+
 #: More candidate boxes than this for skeleton nodes (F and two partial
 #: derivatives zero) are a curve of them (a surface of revolution), not points.
 SKELETON_NODE_MAX = 4096

@@ -18,6 +18,8 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from singmesh import tolerances as tol
 from singmesh.boxes.bernstein import bernstein_on_box, derivative, split
@@ -83,16 +85,24 @@ def _corners(box, corner, level):
     return (lo, lo + h)
 
 
-def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40) -> np.ndarray:
-    """Least-squares Newton on (F, grad F) = 0 from many starts at once."""
+def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
+                 max_step: float | None = None, across: np.ndarray | None = None) -> np.ndarray:
+    """Least-squares Newton on (F, grad F) = 0 from many starts at once.
+
+    With ``max_step``, steps longer than that are shortened to it; with
+    ``across`` (a unit vector), steps have no component along it.
+    """
     x = np.array(x, dtype=float)
     for _ in range(iterations):
-        f = surface(x)
-        g = surface.gradient(x)
-        h = surface.hessian(x)
+        f, g, h = surface.jet(x)
         r = np.concatenate([f[:, None], g], axis=1)  # (K, 4)
         j = np.concatenate([g[:, None, :], h], axis=1)  # (K, 4, 3)
         step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
+        if across is not None:
+            step = step - np.outer(step @ across, across)
+        if max_step is not None:
+            length = np.linalg.norm(step, axis=1, keepdims=True)
+            step = step * np.minimum(1.0, max_step / np.maximum(length, 1e-300))
         x = x - step
     return x
 
@@ -121,14 +131,19 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     -------
     points : list of SingularPoint, sorted by coordinates, classified
     not_isolated : bool
-        True when some candidates lie on a curve of singular points (the
-        classifier finds an infinite Milnor number there); those are not
-        in ``points``.
+        True when some candidate boxes form a long chain (a curve of
+        singular points), or the classifier finds an infinite Milnor number
+        at a point; those are not in ``points``.
     """
     box = np.asarray(box, dtype=float)
     lo, hi = candidate_boxes(surface, box, level)
+    # A curve of singular points makes a long chain of candidate boxes
+    # with singular points all along it.  Starts in a chain are not points.
+    on_curve = _curve_chains(surface, lo, hi, box)
+    curve = bool(on_curve.any())
+    lo, hi = lo[~on_curve], hi[~on_curve]
     if len(lo) == 0:
-        return [], False
+        return [], curve
 
     x = gauss_newton(surface, (lo + hi) / 2)
     size = box[:, 1] - box[:, 0]
@@ -141,16 +156,15 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     ok[ok] = residual(surface, x[ok]) < tol.SINGULAR_LOOSE
     x = x[ok]
     if len(x) == 0:
-        return [], False
+        return [], curve
+    cell = float(np.max(hi[0] - lo[0]))
     # One start per distinct end point (to the merge distance), best first.
     res = residual(surface, x)
     x = _dedupe(x, tol.SINGULAR_MERGE * size.max(), key=res)
     x = x[np.lexsort((x[:, 2], x[:, 1], x[:, 0], residual(surface, x)))]
-    cell = float(np.max(hi[0] - lo[0]))
     limit = accept_residual(surface)
     found: list[SingularPoint] = []
     regions: list[tuple[np.ndarray, float]] = []   # centres and the radius their starts fall in
-    curve = False
     with np.errstate(all="ignore"):
         for p in x:
             if any(np.linalg.norm(p - c) <= r for c, r in regions):
@@ -179,6 +193,86 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     keep = [min(found, key=lambda s: np.linalg.norm(s.point - q)) for q in pts]
     keep.sort(key=lambda s: tuple(s.point))
     return keep, curve
+
+
+def _clumps(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Connected clumps of boxes (integer cells touching at a face, edge or corner).
+
+    Returns
+    -------
+    label : (K,) int64     clump of each cell
+    span : (L,) int64      largest extent of each clump, in cells
+    """
+    n = len(cells)
+    if n == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    c = cells - cells.min(axis=0) + 1
+    m = int(c.max()) + 2
+    keys = (c[:, 0] * m + c[:, 1]) * m + c[:, 2]
+    order = np.argsort(keys)
+    sorted_keys = keys[order]
+    rows, cols = [], []
+    for d in np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij")).reshape(3, -1).T:
+        if not d.any():
+            continue
+        q = ((c[:, 0] + d[0]) * m + c[:, 1] + d[1]) * m + c[:, 2] + d[2]
+        pos = np.minimum(np.searchsorted(sorted_keys, q), n - 1)
+        hit = sorted_keys[pos] == q
+        rows.append(np.nonzero(hit)[0])
+        cols.append(order[pos[hit]])
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    _, label = connected_components(coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)), directed=False)
+    lo = np.full((label.max() + 1, 3), np.iinfo(np.int64).max)
+    hi = np.full((label.max() + 1, 3), np.iinfo(np.int64).min)
+    np.minimum.at(lo, label, cells)
+    np.maximum.at(hi, label, cells)
+    return label, (hi - lo).max(axis=1) + 1
+
+
+def _principal(points: np.ndarray) -> np.ndarray:
+    """The unit direction along which ``points`` spread most."""
+    return np.linalg.svd(points - points.mean(axis=0), full_matrices=False)[2][0]
+
+
+def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Which candidate boxes lie on a curve of singular points.
+
+    A curve makes a clump of at least ``CURVE_SPAN`` boxes (touching at a
+    face, edge or corner) with singular points all along it.  A degenerate
+    isolated point makes a long clump too (a corank-3 point, or one with
+    rounded coefficients: its Bernstein ranges hold zero far out), but
+    with one singular point in it.  So: Newton from ``CURVE_SAMPLES`` boxes
+    spread along each long clump, across the clump (along it, Newton drifts
+    on a curve to its most degenerate point); it is a curve when two of
+    them reach singular points (to the precision of the input) next to
+    their boxes and ``CURVE_SPAN / 2`` boxes apart.
+    """
+    if len(lo) == 0:
+        return np.zeros(0, bool)
+    cells = np.rint((lo - box[:, 0]) / (hi - lo)).astype(np.int64)
+    label, extent = _clumps(cells)
+    curve = np.zeros(len(extent), bool)
+    h = float(np.max(hi[0] - lo[0]))
+    limit = accept_residual(surface)
+    for lab in np.nonzero(extent >= tol.CURVE_SPAN)[0].tolist():
+        mine = np.nonzero(label == lab)[0]
+        centres = (lo[mine] + hi[mine]) / 2
+        axis = _principal(centres)
+        t = (centres - centres.mean(axis=0)) @ axis
+        picks = np.argsort(t, kind="stable")[np.linspace(0, len(mine) - 1, tol.CURVE_SAMPLES).astype(int)]
+        ends = []
+        for k in picks.tolist():
+            # Across the clump where it is: the boxes within three of this one.
+            local = centres[np.abs(centres - centres[k]).max(axis=1) <= 3.0 * h]
+            x = gauss_newton(surface, centres[k][None], iterations=60, max_step=h, across=_principal(local))[0]
+            if np.abs(x - centres[k]).max() <= 2 * h and residual(surface, x[None])[0] <= limit:
+                ends.append(x)
+        # Two singular points CURVE_SPAN / 2 boxes apart, each found next to
+        # where it was looked for: an isolated point is one of them at most.
+        ends = np.array(ends).reshape(-1, 3)
+        far = np.linalg.norm(ends[:, None] - ends[None], axis=2).max(initial=0.0)
+        curve[lab] = far >= 0.5 * tol.CURVE_SPAN * h
+    return curve[label]
 
 
 def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: bool = False):

@@ -204,3 +204,41 @@ def test_no_warning_when_every_point_is_meshed():
         warnings.simplefilter("error", singmesh.SingularPointWarning)
         m = singmesh.mesh("4(x^2+y^2+z^2) + 16 x y z - 1", ((-1.5, 1.5),) * 3)
     assert len(m.singularities) == 4 and not m.singular_point_warnings()
+
+
+# ------------------------------------------------------------------ curves are not points
+@pytest.mark.parametrize("text, curve", [
+    ("x^2 + y^2 z^3 - z^4", True),                       # Hauser's Calyx: the y-axis is singular
+    ("x^4 y^2 + y^4 x^2 - x^2 y^2 + z^6", True),         # Buggle: the x- and y-axes
+    ("x^3 z + 10 x^2 y + x y^2 + y z^2 - z^3", False),   # Harlekin: one corank-3 point, isolated
+    ("x^2 + z^2 - y^3 (y-1)^3", False),                  # Zitrus: two A2 points
+])
+def test_curves_of_singular_points_are_told_from_points(text, curve):
+    # Along a curve Newton drifts and the classifier reads nonsense types
+    # off points beside it; the candidate boxes tell: a chain as long in
+    # space at every level.  A corank-3 point makes a long clump too, but
+    # one that halves with the boxes.
+    box = ((-1.14, 1.03), (-1.13, 1.04), (-1.12, 1.05))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", singmesh.SingularPointWarning)
+        m = singmesh.mesh(text, box, coarse=16, fine=64)
+    assert m.stats["singular_locus_not_isolated"] == curve
+    if curve:
+        assert all(s.classification.milnor is None or s.classification.milnor < 10 for s in m.singularities)
+    else:
+        assert len(m.singularities) >= 1 and not any(
+            "curve" in (s.classification.note or "") for s in m.singularities)
+
+
+@pytest.mark.skipif(shutil.which("Singular") is None,
+                    reason="Singular is not installed (apt-get install singular): the oracle is skipped")
+@pytest.mark.parametrize("text, curve", [
+    ("x^2 + y^2 z^3 - z^4", True), ("x^3 z + 10 x^2 y + x y^2 + y z^2 - z^3", False),
+])
+def test_curve_oracle_is_singulars_dimension(text, curve):
+    _, poly = sympy.Poly(Surface.parse(text).expr, X, Y, Z).clear_denoms()
+    terms = " + ".join(f"({int(c)})*x^{i}*y^{j}*z^{k}" for (i, j, k), c in poly.terms())
+    script = (f"ring r = 0, (x,y,z), dp; poly f = {terms}; "
+              "ideal i = f, diff(f,x), diff(f,y), diff(f,z); print(dim(std(i))); quit;")
+    out = subprocess.run(["Singular", "-q"], input=script, capture_output=True, text=True, timeout=60).stdout
+    assert int(out.strip()) == (1 if curve else 0)
