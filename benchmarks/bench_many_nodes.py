@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -26,30 +26,12 @@ from scipy.spatial import cKDTree
 import nodes
 import singmesh
 
+# The fan count of the tests' independent mesh checks.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+from meshcheck import fans_at  # noqa: E402
+
 #: Starting points per axis for the independent node search.
 STARTS = {"barth10": 48, "endrass": 48}
-
-
-def fans(faces: np.ndarray, vertex: int) -> int:
-    """Edge-connected fans of triangles around ``vertex`` (its own count, not singmesh's)."""
-    tris = faces[(faces == vertex).any(axis=1)]
-    parent = list(range(len(tris)))
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    by_edge = defaultdict(list)
-    for i, t in enumerate(tris.tolist()):
-        for w in t:
-            if w != vertex:
-                by_edge[w].append(i)
-    for ids in by_edge.values():
-        for j in ids[1:]:
-            parent[find(j)] = find(ids[0])
-    return len({find(i) for i in range(len(tris))})
 
 
 def main(argv=None) -> int:
@@ -76,7 +58,7 @@ def main(argv=None) -> int:
             best = min(best, time.perf_counter() - t0)
         size = float(np.max(np.ptp(np.array(s.box, float), axis=1)))
         d, idx = cKDTree(m.vertices).query(true)
-        ok = sum(1 for dist, i in zip(d, idx) if dist <= 1e-9 * size and fans(m.faces, i) == 2)
+        ok = sum(1 for dist, i in zip(d, idx) if dist <= 1e-9 * size and fans_at(m.faces, i) == 2)
         r = m.report()
         print(f"{s.name:15s} {len(true):5d} {best:7.2f}s {1000 * best / max(len(true), 1):7.1f}ms "
               f"{ok:>12d}/{len(true):<6d} {r['boundary_edges_off_box']:5d} {r['non_manifold_edges']:12d} "

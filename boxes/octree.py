@@ -191,26 +191,25 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
     return result
 
 
-def _meets_any(box, fine_level, level, corner, regions, rel=1e-9):
-    """Whether each box (closed, slightly widened) meets one of ``regions``."""
+def _relation(box, fine_level, level, corner, regions, rel=1e-9):
+    """Whether each box meets, and whether it lies inside, one of ``regions``.
+
+    Boxes are taken closed and slightly widened for meeting (touching
+    counts), slightly shrunk for lying inside.
+
+    Returns
+    -------
+    meets, inside : (N,) bool
+    """
     cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
     size = 1 << (fine_level - level)
-    lo = box[:, 0] + corner * cell
+    lo = (box[:, 0] + corner * cell)[:, None, :]
     hi = lo + size * cell
     pad = rel * size * cell
-    meets = ((lo - pad)[:, None, :] <= regions[None, :, 1, :]) & ((hi + pad)[:, None, :] >= regions[None, :, 0, :])
-    return meets.all(axis=2).any(axis=1)
-
-
-def _inside_any(box, fine_level, level, corner, regions, rel=1e-9):
-    """Whether each box lies inside one of ``regions`` (closed, slightly widened)."""
-    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
-    size = 1 << (fine_level - level)
-    lo = box[:, 0] + corner * cell
-    hi = lo + size * cell
-    pad = rel * size * cell
-    inside = ((lo + pad)[:, None, :] >= regions[None, :, 0, :]) & ((hi - pad)[:, None, :] <= regions[None, :, 1, :])
-    return inside.all(axis=2).any(axis=1)
+    r_lo, r_hi = regions[None, :, 0, :], regions[None, :, 1, :]
+    meets = ((lo - pad <= r_hi) & (hi + pad >= r_lo)).all(axis=2).any(axis=1)
+    inside = ((lo + pad >= r_lo) & (hi - pad <= r_hi)).all(axis=2).any(axis=1)
+    return meets, inside
 
 
 def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None):
@@ -235,11 +234,11 @@ def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=No
         if level >= coarse_level:
             simple = monotone_axis(tensors) >= 0
             if keep_splitting is not None and len(keep_splitting):
-                simple &= ~_meets_any(box, fine_level, level, corner, keep_splitting)
+                simple &= ~_relation(box, fine_level, level, corner, keep_splitting)[0]
             in_star = np.zeros(len(corner), bool)
             if stars is not None and len(stars):
-                in_star = _inside_any(box, fine_level, level, corner, stars)
-                simple &= ~in_star & ~_meets_any(box, fine_level, level, corner, stars)
+                meets, in_star = _relation(box, fine_level, level, corner, stars)
+                simple &= ~in_star & ~meets
             stop = simple | in_star | (level == fine_level)
             leaves_t.append(tensors[stop])
             leaves_c.append(corner[stop])
@@ -269,8 +268,7 @@ def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
     touch = np.zeros(len(tree.level), bool)
     for lvl in np.unique(tree.level).tolist():
         sel = np.nonzero(tree.level == lvl)[0]
-        inside[sel] = _inside_any(tree.box, tree.fine_level, lvl, tree.corner[sel], stars)
-        touch[sel] = _meets_any(tree.box, tree.fine_level, lvl, tree.corner[sel], stars)
+        touch[sel], inside[sel] = _relation(tree.box, tree.fine_level, lvl, tree.corner[sel], stars)
     grow = touch & ~inside & (tree.level < tree.fine_level)
     if not grow.any():
         simple = tree.simple & ~inside
