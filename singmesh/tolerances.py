@@ -150,6 +150,12 @@ CANDIDATE_CHUNK = 2048
 CURVE_SPAN = 8
 CURVE_SAMPLES = 9
 
+#: A sample of such a clump is on the curve when Newton (across the clump,
+#: which converges only linearly on a curve of cusps) gets the relative
+#: residual below this next to its box.  An isolated A5 four boxes away
+#: is at ~1e-7.
+CURVE_RESIDUAL = 1e-8
+
 #: More candidate boxes than this for skeleton nodes (F and two partial
 #: derivatives zero) are a curve of them (a surface of revolution), not points.
 SKELETON_NODE_MAX = 4096

@@ -155,9 +155,14 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     ok = inside & near_cell & np.isfinite(x).all(axis=1)
     ok[ok] = residual(surface, x[ok]) < tol.SINGULAR_LOOSE
     x = x[ok]
+    cell = float(np.max(hi[0] - lo[0]))
+    # Starts along a curve the clump test missed (a clump of candidates
+    # spread over a sheet, where Newton across does not settle) end densely
+    # along it: a chain of end points CURVE_SPAN boxes long.
+    x, more = _dense_chains(x, cell)
+    curve |= more
     if len(x) == 0:
         return [], curve
-    cell = float(np.max(hi[0] - lo[0]))
     # One start per distinct end point (to the merge distance), best first.
     res = residual(surface, x)
     x = _dedupe(x, tol.SINGULAR_MERGE * size.max(), key=res)
@@ -169,13 +174,21 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
         for p in x:
             if any(np.linalg.norm(p - c) <= r for c, r in regions):
                 continue  # another start in the region of a point already centred
+            if _on_curve(surface, p, cell, steps=(4, 8)):
+                # On a curve of singular points: not a point, and no need
+                # to classify it (the costliest kind to classify).
+                curve = True
+                regions.append((p, 3.0 * cell))
+                continue
             try:
                 q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit)
             except NotSingularError:
                 continue  # singular only to the loose test
-            if kind.name == "non-simple" and "curve of singular points" in kind.note:
+            if kind.milnor is None and _on_curve(surface, q, cell):
+                # Non-simple: on a curve of singular points (its neighbours
+                # are singular too), or an isolated point of higher type.
                 curve = True
-                regions.append((q, 2.0 * cell))
+                regions.append((q, 3.0 * cell))
                 continue
             if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
                 continue
@@ -253,7 +266,9 @@ def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndar
     label, extent = _clumps(cells)
     curve = np.zeros(len(extent), bool)
     h = float(np.max(hi[0] - lo[0]))
-    limit = accept_residual(surface)
+    # Newton across a curve of cusps or tacnodes converges slowly; a point
+    # residual of CURVE_RESIDUAL is on it for this purpose.
+    limit = max(accept_residual(surface), tol.CURVE_RESIDUAL)
     for lab in np.nonzero(extent >= tol.CURVE_SPAN)[0].tolist():
         mine = np.nonzero(label == lab)[0]
         centres = (lo[mine] + hi[mine]) / 2
@@ -273,6 +288,53 @@ def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndar
         far = np.linalg.norm(ends[:, None] - ends[None], axis=2).max(initial=0.0)
         curve[lab] = far >= 0.5 * tol.CURVE_SPAN * h
     return curve[label]
+
+
+def _on_curve(surface: Surface, p: np.ndarray, cell: float, steps=(2,)) -> bool:
+    """Whether singular points lie ``steps`` boxes away from ``p`` along its Hessian's kernel.
+
+    Newton across a kernel direction from so many boxes along it (either
+    way): on a curve of singular points (tangent in the kernel) it lands
+    next to where it started, at every step; near an isolated point
+    nothing is singular that far (at two boxes even an A5, checked only
+    once the classifier found a non-simple point; at four and eight any
+    A_k up to A7).
+    """
+    w, v = np.linalg.eigh(surface.hessian(p))
+    kernel = v[:, np.abs(w) <= tol.CENTRE_RANK_RTOL * max(np.abs(w).max(), 1e-300)]
+    for d in kernel.T:
+        hits = 0
+        for k in steps:
+            for sign in (1.0, -1.0):
+                start = p + sign * k * cell * d
+                q = gauss_newton(surface, start[None], iterations=40, max_step=cell, across=d)[0]
+                if np.abs(q - start).max() <= 1.5 * cell and residual(surface, q[None])[0] <= tol.CURVE_RESIDUAL:
+                    hits += 1
+                    break
+        if hits == len(steps):
+            return True
+    return False
+
+
+def _dense_chains(x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:
+    """Newton end points not in a dense chain, and whether there was one.
+
+    Single-linkage clusters at two boxes spanning ``CURVE_SPAN`` boxes or
+    more with at least one end point per two boxes of their span: end
+    points along a curve.  Nodes, even hundreds, are boxes apart.
+    """
+    from scipy.cluster.hierarchy import fcluster, linkage
+
+    if len(x) < 2:
+        return x, False
+    labels = fcluster(linkage(x, method="single", metric="euclidean"), t=2.0 * cell, criterion="distance")
+    drop = np.zeros(len(x), bool)
+    for lab in np.unique(labels):
+        sel = labels == lab
+        span = float(np.ptp(x[sel], axis=0).max())
+        if span >= tol.CURVE_SPAN * cell and sel.sum() >= 0.5 * span / cell:
+            drop |= sel
+    return x[~drop], bool(drop.any())
 
 
 def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: bool = False):
