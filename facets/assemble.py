@@ -163,6 +163,7 @@ def assemble(
     gradient: Callable[[np.ndarray], np.ndarray],
     project: Callable[[np.ndarray], np.ndarray] | None = None,
     apex: np.ndarray | None = None,
+    fixed_keys: np.ndarray | None = None,
 ):
     """Vertices and triangles from polygons given by vertex keys.
 
@@ -175,6 +176,9 @@ def assemble(
     apex : (P,) bool, optional
         Polygons whose first vertex is a singular point: large ones are
         fanned from it rather than from a new centre vertex.
+    fixed_keys : (F,) int64, optional
+        Keys of vertices on a curve of singular points: an edge between
+        two of them is never flipped (it is the curve, or a crease).
 
     Returns
     -------
@@ -198,7 +202,8 @@ def assemble(
     # surface) has no area: its triangles go.  Elsewhere the template
     # search never picks a zero-area triangle when another exists.
     faces = faces[~_zero_area(vertices, faces)]
-    faces = flip_slivers(vertices, faces)
+    fixed = None if fixed_keys is None else np.isin(vkeys, fixed_keys)
+    faces = flip_slivers(vertices, faces, fixed)
     # Drop vertices no triangle uses (collapsed infinitesimal features).
     used = np.zeros(len(vertices), bool)
     used[faces.ravel()] = True

@@ -24,13 +24,16 @@ def _min_angle(p: np.ndarray) -> float:
     return min(ang)
 
 
-def flip_slivers(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def flip_slivers(vertices: np.ndarray, faces: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
     """Flip the longest edge of near-flat triangles where that helps.
 
     Parameters
     ----------
     vertices : (V, 3)
     faces : (T, 3) int64, consistently oriented
+    fixed : (V,) bool, optional
+        Vertices on a singular curve: an edge joining two of them is never
+        flipped away, nor made.
 
     Returns
     -------
@@ -66,6 +69,8 @@ def flip_slivers(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         if len(d) != 1 or (c, d[0]) in edge_of or (d[0], c) in edge_of:
             continue
         d = d[0]
+        if fixed is not None and ((fixed[a] and fixed[b]) or (fixed[c] and fixed[d])):
+            continue
         new1, new2 = [c, a, d], [d, b, c]
         old_n = np.cross(q[1] - q[0], q[2] - q[0]) + np.cross(*(vertices[faces[u]][1:] - vertices[faces[u]][0]))
         ok = True

@@ -500,8 +500,14 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
     note = None
     if not len(m.faces):
         note = "empty mesh" + (" (singular points only)" if sings else "")
+    if not len(m.faces) and m.singular_curves:
+        note = "no triangle: the real surface is only a curve here"
     points = np.array([s["point"] for s in sings], dtype=float).reshape(-1, 3)
+    record["curves"] = [{"type": c.type, "sheets": c.sheets, "vertices": len(c.points), "length": c.length}
+                        for c in m.singular_curves]
+    record["special_points"] = [{"kind": sp.kind, "point": sp.point.tolist()} for sp in m.special_points]
     render_png(out / f"{entry.slug}.png", m.vertices, m.faces, m.box, normals=m.normals,
-               points=points, point_names=[s["name"] for s in sings], size=size, note=note)
+               points=points, point_names=[s["name"] for s in sings], size=size, note=note,
+               curves=[c.points for c in m.singular_curves], curve_names=[c.type for c in m.singular_curves])
     record["files"]["png"] = f"{entry.slug}.png"
     record["render_time"] = time.perf_counter() - t1

@@ -110,7 +110,8 @@ def point_colour(name: str | None) -> str:
 def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
                normals: np.ndarray | None = None, points: np.ndarray | None = None,
                point_names: Sequence[str] | None = None, size: int = 640,
-               note: str | None = None) -> Path:
+               note: str | None = None, curves: Sequence[np.ndarray] | None = None,
+               curve_names: Sequence[str] | None = None) -> Path:
     """Render a shaded picture of a triangle mesh to a PNG file.
 
     Parameters
@@ -133,6 +134,11 @@ def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
         Width and height in pixels.
     note : str, optional
         A line of text written in the picture (e.g. "empty mesh").
+    curves : sequence of (k, 3) arrays, optional
+        Curves of singular points, drawn as polylines on top (an isolated
+        real line is then visible at all).
+    curve_names : sequence of str, optional
+        Their transversal types (isolated lines are drawn dashed).
 
     Returns
     -------
@@ -181,6 +187,14 @@ def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
         # antialiasing leaves between neighbouring triangles.
         ax.add_collection(PolyCollection(screen[order], facecolors=colours, edgecolors=colours,
                                          linewidths=0.35, antialiaseds=True, zorder=2))
+
+    for k, c in enumerate(curves or []):
+        xy = (np.asarray(c, dtype=float).reshape(-1, 3) - centre) @ basis[:2].T
+        name = (curve_names or [""] * len(curves))[k] or ""
+        alone = "isolated" in name
+        ax.plot(xy[:, 0], xy[:, 1], color="#b91c1c" if not alone else "#7c3aed",
+                linewidth=max(1.2, size / 400.0), linestyle=(0, (4, 2)) if alone else "-",
+                solid_capstyle="round", zorder=4)
 
     if points is not None and len(points):
         pts = (np.asarray(points, dtype=float).reshape(-1, 3) - centre) @ basis[:2].T

@@ -15,9 +15,11 @@ from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
+from singmesh.facets.tubes import rails, strip_triangles, tube_leaves, tube_regions
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
+from singmesh.skeleton.singular_curves import singular_curves
 
 from . import tolerances as tol
 from .errors import SurfaceError
@@ -91,21 +93,32 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     if fine_level < coarse_level:
         raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
 
+    cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
+    t_curves = time.perf_counter()
+    curves = singular_curves(surf, b, step=float(cell.max()))
+    t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
-    # A curve of singular points (the classifier finds an infinite Milnor
-    # number on it) is not meshed as points: ``overflow``.
-    points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    # Points on the curves are their special points (pinch and triple
+    # points): the point search leaves the curves alone.  A curve it sees
+    # that was not traced (``overflow``) is reported, not meshed.
+    avoid = _curve_points(curves, 0.25 * float(cell.max())) if len(curves.points) else None
+    points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL),
+                                       avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()))
     kinds = [sp.classification for sp in points]
     t_sing = time.perf_counter() - t_sing
-    cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
-    # First pass: the boxes at each singular point go to the fine level.
+    # First pass: the boxes at each singular point, and along each curve
+    # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
-    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=None if overflow else cubes)
+    keep = cubes
+    if len(curves.points):
+        keep = np.concatenate([cubes, tube_regions(b, fine_level, curves.points, curves.edges,
+                                                   pad=max(tol.CURVE_TUBE_GROW, tol.CURVE_BALL_GROW) + 2)])
+    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
-    cubes = star_cubes(tree, links, centres) if len(points) and not overflow else None
+    cubes = star_cubes(tree, links, centres) if len(points) else None
     first = tree
     for attempt in range(tol.STAR_RETRIES + 1):
         if cubes is not None:
@@ -116,7 +129,12 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
             events = compute_events(surf, tree)
             links = face_links(tree, events)
         group, stars, clashes = group_stars(tree, cubes, centres)
-        cycles = find_cycles(*box_links(links, group), n_events=len(events.key))
+        tube_id = len(tree.level) + len(points)
+        if len(curves.points):
+            balls = [sp.point for sp in curves.special if sp.kind in ("pinch point", "triple point")]
+            group[tube_leaves(tree, links, curves.points, curves.edges, np.array(balls))] = tube_id
+        grouped = box_links(links, group)
+        cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface
         # in it joins branches: fewer link cycles than the classifier's
         # branches.  Those stars shrink by half and are meshed again.
@@ -125,9 +143,14 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
             break
         cubes = shrink_cubes(first, cubes, centres, few)
 
-    offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points)
+    offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points, tube_id)
+    curve_key0 = _curve_key0(events)
+    if len(curves.points):
+        offsets, keys, pts, apex = _add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
+                                               tube_id, curve_key0, float(cell.max()), b)
+    fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
-                                      project=lambda q: project_to_surface(surf, q), apex=apex)
+                                      project=lambda q: project_to_surface(surf, q), apex=apex, fixed_keys=fixed)
     # Where two axis skeletons meet (normal along an axis), for reference.
     nodes, node_axes = skeleton_nodes(surf, b, level=min(fine_level, tol.SKELETON_NODE_LEVEL))
     singular = []
@@ -135,6 +158,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         where = np.nonzero(vkeys == _point_key(i))[0]
         singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
                                 branches=branches.get(i, 0), classification=kinds[i]))
+    curve_list, special = _curve_records(curves, vkeys, curve_key0)
     stats = {
         "leaves": len(tree.level),
         "non_simple_leaves": int((~tree.simple).sum()),
@@ -145,12 +169,15 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "ambiguous_squares": int(links.ambiguous.sum()),
         "inconsistent_squares": int(links.inconsistent.sum()),
         "singular_search_time": t_sing,
-        "singular_locus_not_isolated": bool(overflow),
+        "curve_time": t_curves,
+        "singular_locus_not_isolated": bool(overflow or len(curves.points)),
+        "untraced_curve": bool(overflow),
         "overlapping_stars": len(clashes),
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
-             skeleton_nodes=nodes, skeleton_node_axes=node_axes)
+             skeleton_nodes=nodes, skeleton_node_axes=node_axes, singular_curves=curve_list,
+             special_points=special, curve_graph=_curve_graph(curves, vkeys, curve_key0))
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
@@ -180,7 +207,65 @@ def _square_bounds(tree, square):
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
-def _polygons(surf, tree, events, links, cycles, stars, points):
+def _curve_points(curves, spacing: float) -> np.ndarray:
+    """Points along all singular curves, ``spacing`` apart."""
+    from singmesh.facets.tubes import curve_samples
+
+    return curve_samples(curves.points, curves.edges, spacing)
+
+
+def _curve_key0(events) -> int:
+    """First vertex key of the curve vertices: above every event and sector node key."""
+    return (int(events.key.max()) + 1 if len(events.key) else 0) + (1 << 40)
+
+
+def _add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id, key0, cell, tree_box):
+    """The polygons with the tube's strips (triangles from rails to the curve) appended."""
+    box_ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)
+                         if sp.kind == "end on the box"], np.int64)
+    tri_keys, tri_pts = strip_triangles(rails(grouped, links, tube_id), events.point, events.key, curves.points,
+                                        curves.edges, key0 + np.arange(len(curves.points)), box_ends,
+                                        reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=tree_box)
+    n = len(tri_keys)
+    offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
+    keys = np.concatenate([keys, tri_keys.ravel()])
+    pts = np.concatenate([pts, tri_pts.reshape(-1, 3)])
+    apex = np.concatenate([apex, np.zeros(n, bool)])
+    return offsets, keys, pts, apex
+
+
+def _vertex_of(vkeys, keys):
+    """Mesh vertex of each key, -1 for keys no vertex has."""
+    if len(vkeys) == 0:
+        return np.full(len(keys), -1, np.int64)
+    order = np.argsort(vkeys)
+    pos = np.minimum(np.searchsorted(vkeys[order], keys), max(len(vkeys) - 1, 0))
+    hit = (len(vkeys) > 0) & (vkeys[order][pos] == keys)
+    return np.where(hit, order[pos], -1)
+
+
+def _curve_records(curves, vkeys, key0):
+    """The curves' pieces and special points with their mesh vertices filled in."""
+    if len(curves.points) == 0:
+        return [], []
+    vert = _vertex_of(vkeys, key0 + np.arange(len(curves.points)))
+    # Points no triangle has (an isolated line) follow the vertices, as in
+    # Mesh.curve_lines().
+    alone = vert < 0
+    vert[alone] = len(vkeys) + np.arange(alone.sum())
+    pieces = [replace(c, vertices=vert[c.vertices]) for c in curves.pieces]
+    special = [replace(sp, vertex=int(vert[v])) for sp, v in zip(curves.special, curves.special_vertex.tolist())]
+    return pieces, special
+
+
+def _curve_graph(curves, vkeys, key0):
+    """The curve graph: its points, edges (point pairs) and the mesh vertex of each point (-1: none)."""
+    if len(curves.points) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
+    return curves.points, curves.edges, _vertex_of(vkeys, key0 + np.arange(len(curves.points)))
+
+
+def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
     """Facet polygons (offsets, keys, points, apex flags) and branch counts.
 
     Plain boxes give one polygon per cycle; the star of a singular point
@@ -189,6 +274,8 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
     plain |= stray_cycles(cycles, events, stars, [getattr(sp.classification, "branches", None) for sp in points])
+    tube = cycles.box == tube_id  # meshed as strips
+    plain &= ~tube
     ev = cycles.events
     owner = np.repeat(np.arange(len(cycles)), sizes)
     keep = plain[owner]
@@ -200,7 +287,7 @@ def _polygons(surf, tree, events, links, cycles, stars, points):
     branches = {}
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
-    for c in np.nonzero(~plain)[0]:
+    for c in np.nonzero(~plain & ~tube)[0]:
         i = stars[cycles.box[c]]
         p = points[i].point
         span = slice(cycles.offsets[c], cycles.offsets[c + 1])

@@ -18,6 +18,10 @@ FORMATS = {
 }
 
 
+#: Formats whose files hold line cells beside the triangles.
+LINE_FORMATS = ("vtk", "vtu", "xdmf", "gmsh")
+
+
 class SingularPointWarning(UserWarning):
     """A singular point is not meshed as it is (not a vertex, or wrong branches)."""
 
@@ -46,6 +50,16 @@ class Mesh:
         not: where the x-, y- and z-skeletons meet (isolated ones only).
     skeleton_node_axes : (j, 2) int64
         The two derivatives vanishing at each skeleton node.
+    singular_curves : list of :class:`singmesh.skeleton.singular_curves.SingularCurve`
+        The curves of singular points, one record per piece of one
+        transversal type (polyline, type, sheets, end points, mesh vertices).
+    special_points : list of :class:`singmesh.skeleton.singular_curves.SpecialPoint`
+        Pinch points, triple points, crossings, changes of type and ends on
+        the box of the curves, each a mesh vertex.
+    curve_graph : ((c, 3) float64, (e, 2) int64, (c,) int64)
+        All curves as one graph: its points, its edges (pairs of points)
+        and the mesh vertex at each point (-1 where no triangle has it:
+        an isolated real line).
     """
 
     vertices: np.ndarray
@@ -57,6 +71,10 @@ class Mesh:
     stats: dict = field(default_factory=dict)
     skeleton_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     skeleton_node_axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    singular_curves: list = field(default_factory=list)
+    special_points: list = field(default_factory=list)
+    curve_graph: tuple = field(default_factory=lambda: (np.zeros((0, 3)), np.zeros((0, 2), np.int64),
+                                                        np.zeros(0, np.int64)))
 
     def __post_init__(self):
         if self.normals is None:
@@ -100,6 +118,9 @@ class Mesh:
             "max_distance": float(dist.max() / size) if len(dist) else 0.0,
             "min_angle": float(angles.min()) if len(angles) else float("nan"),
             "singular_points": len(self.singularities),
+            "singular_curves": len(self.singular_curves),
+            "special_points": len(self.special_points),
+            "line_cells": int(len(self.curve_lines()[1])),
         }
 
     def report_text(self) -> str:
@@ -122,6 +143,13 @@ class Mesh:
         lines.append(f"singular points      {r['singular_points']}")
         for s in self.singularities:
             lines.append("  " + (s.describe() if hasattr(s, "describe") else str(s)))
+        if self.singular_curves:
+            lines.append(f"singular curves      {r['singular_curves']} (line cells {r['line_cells']})")
+            for c in self.singular_curves:
+                lines.append("  " + c.describe())
+            lines.append(f"special points       {r['special_points']}")
+            for sp in self.special_points:
+                lines.append("  " + sp.describe())
         lines += [f"note: {n}" for n in self.notes()]
         return "\n".join(lines)
 
@@ -139,8 +167,8 @@ class Mesh:
         out = []
         if lost:
             why = []
-            if self.stats.get("singular_locus_not_isolated"):
-                why.append("a curve of singular points in the box (stars are not built)")
+            if self.stats.get("untraced_curve"):
+                why.append("a curve of singular points in the box that was not traced")
             if self.stats.get("overlapping_stars"):
                 why.append(f"{self.stats['overlapping_stars']} too close to another point to have a star")
             out.append(f"{len(lost)} of {len(self.singularities)} singular point(s) with branches are not "
@@ -157,9 +185,12 @@ class Mesh:
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""
         out = self.singular_point_warnings()
-        if self.stats.get("singular_locus_not_isolated"):
-            out.append("F has a curve of singular points in the box (not isolated points); "
-                       "such curves are not meshed as singular (unsupported)")
+        if self.stats.get("untraced_curve"):
+            out.append("F has a curve of singular points in the box that could not be traced; "
+                       "near it the mesh is not right")
+        bad = self.stats.get("curve_edges_not_meshed", 0)
+        if bad:
+            out.append(f"{bad} edge(s) of the singular curves have fewer triangles than the sheets through them")
         if len(self.faces) == 0:
             if self.singularities:
                 out.append("no triangle: in this box the real surface is only isolated point(s)")
@@ -168,12 +199,50 @@ class Mesh:
         return out
 
     # ------------------------------------------------------------ export
-    def to_meshio(self):
-        """The mesh as a ``meshio.Mesh`` (vertex normals as point data)."""
+    def curve_lines(self) -> tuple[np.ndarray, np.ndarray]:
+        """The one-dimensional part: curve edges that no triangle has.
+
+        Returns
+        -------
+        points : (n + k, 3)
+            The vertices, then the k curve points that are no vertex.
+        lines : (L, 2) int64
+            Line cells, indices into ``points``.
+        """
+        pts, edges, vertex = self.curve_graph
+        if len(edges) == 0:
+            return self.vertices, np.zeros((0, 2), np.int64)
+        extra = vertex < 0
+        index = vertex.copy()
+        index[extra] = len(self.vertices) + np.arange(extra.sum())
+        lines = index[edges]
+        if len(self.faces):
+            tri_edges, _ = topology.edges_with_counts(self.faces)
+            n = len(self.vertices) + int(extra.sum())
+            have = np.isin(np.sort(lines, axis=1) @ np.array([n, 1]), np.sort(tri_edges, axis=1) @ np.array([n, 1]))
+            lines = lines[~have]
+        return np.vstack([self.vertices, pts[extra]]), lines
+
+    def write_curves(self, path) -> Path:
+        """Write the singular curves alone (every curve edge as a line cell) through meshio."""
         import meshio
 
-        return meshio.Mesh(self.vertices, [("triangle", self.faces)],
-                           point_data={"Normals": self.normals})
+        path = Path(path)
+        pts, edges, _ = self.curve_graph
+        meshio.Mesh(pts, [("line", np.asarray(edges, np.int64).reshape(-1, 2))]).write(path)
+        return path
+
+    def to_meshio(self):
+        """The mesh as a ``meshio.Mesh``: triangles, and line cells for the one-dimensional part.
+
+        Vertex normals are point data (zero at the points of an isolated line).
+        """
+        import meshio
+
+        points, lines = self.curve_lines()
+        cells = [("triangle", self.faces)] + ([("line", lines)] if len(lines) else [])
+        normals = np.vstack([self.normals, np.zeros((len(points) - len(self.vertices), 3))])
+        return meshio.Mesh(points, cells, point_data={"Normals": normals})
 
     def write(self, path, file_format: str | None = None) -> Path:
         """Write through meshio; the format comes from the suffix.
@@ -197,7 +266,18 @@ class Mesh:
             point_data = {k: np.ascontiguousarray(self.normals[:, i]) for i, k in enumerate(("nx", "ny", "nz"))}
         else:
             point_data = {"Normals": self.normals}
-        m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
+        points, lines = self.curve_lines()
+        if fmt in LINE_FORMATS and len(lines):
+            # Line cells in the same file: the one-dimensional part.
+            extra = len(points) - len(self.vertices)
+            point_data = {k: np.concatenate([v, np.zeros((extra,) + v.shape[1:])]) for k, v in point_data.items()}
+            m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data)
+        else:
+            m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
         kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
         m.write(path, file_format=fmt, **kwargs)
+        if self.singular_curves and fmt not in LINE_FORMATS:
+            # The format has no line cells: the curves go to a companion
+            # file beside it (all curve edges, as a VTK polyline set).
+            self.write_curves(path.with_suffix(".curves.vtk"))
         return path

@@ -198,3 +198,66 @@ CENTRE_NEWTON = 8
 
 #: Centring stops when a step moves the point less than this (relative).
 CENTRE_STOP = 4e-16
+
+# ---------------------------------------------------------------- singular curves
+#: Gauss-Newton iterations that put a vertex on a curve of singular points
+#: (across a cuspidal edge convergence is linear: ~2/3 per step).
+CURVE_NEWTON = 40
+
+#: The trace steps this many mesh cells; each step is then divided into
+#: as many vertices by Newton on all of them at once.
+CURVE_TRACE_STEP = 4
+
+#: A trace shorter than this many steps is not a curve (an isolated point).
+CURVE_MIN_STEPS = 2
+
+#: Golden-section / bisection steps placing crossings and changes of type.
+CURVE_CROSSING_STEPS = 40
+
+#: Transversal type: samples on, and radius (in mesh cells) of, the circle
+#: in the normal plane on which the arcs of F = 0 are counted.
+CURVE_CIRCLE_SAMPLES = 720
+CURVE_CIRCLE_RADIUS = 3.0
+
+#: An eigenvalue of the Hessian in the normal plane is zero when below
+#: this times the largest (relative to the polynomial's coefficients for
+#: the largest).
+CURVE_RANK_RTOL = 1e-6
+
+#: The tube of fine leaves meshed along a curve: leaves within this many
+#: cells of it, and the non-simple leaves next to them up to CURVE_TUBE_GROW
+#: cells away.
+CURVE_TUBE_RADIUS = 1.5
+CURVE_TUBE_GROW = 4.0
+
+#: Changes of type along a curve are placed to this fraction of a cell.
+CURVE_PLACE = 1e-12
+
+#: Singular values of the Jacobian of (F, grad F) below this times F's
+#: largest coefficient count as zero on a curve of singular points: the
+#: one along the curve is rounding there.
+CURVE_SVD_FLOOR = 1e-11
+
+#: Newton onto a curve stops when no step is longer than this fraction of
+#: the distance it may move (the points are then at rounding level).
+CURVE_STOP = 1e-13
+
+#: Other changes of type (read from the arcs on a circle, which blur
+#: within its radius) are placed to this fraction of a cell.
+CURVE_TYPE_PLACE = 1e-3
+
+#: The point search leaves alone candidate boxes this many cells from a
+#: traced curve (its pinch and triple points are the curve's).
+CURVE_AVOID = 3.0
+
+#: Traces that lose the curve within this many trace steps of each other
+#: are joined at one point of the singular locus between their ends.
+CURVE_JOIN = 3.0
+
+#: A curve vertex closer than this (in steps) to a special point placed
+#: beside it is merged into the special point.
+CURVE_MERGE = 0.3
+
+#: Around pinch and triple points the non-simple leaves join the tube up
+#: to this many cells away (the sheets meet tangentially there).
+CURVE_BALL_GROW = 10.0

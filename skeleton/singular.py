@@ -117,7 +117,8 @@ def accept_residual(surface: Surface) -> float:
     return max(tol.SINGULAR_RESIDUAL, tol.INPUT_ROUNDING * surface.degree * surface.rounding)
 
 
-def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[SingularPoint], bool]:
+def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | None = None,
+                    avoid_radius: float = 0.0) -> tuple[list[SingularPoint], bool]:
     """Isolated singular points of F = 0 in ``box``.
 
     Parameters
@@ -126,6 +127,10 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     box : (3, 2) array_like
     level : int
         Depth of the candidate search (``2**level`` boxes per axis).
+    avoid : (k, 3) ndarray, optional
+        Points of curves of singular points already traced: candidate boxes
+        within ``avoid_radius`` of them are theirs, not searched again.
+    avoid_radius : float
 
     Returns
     -------
@@ -137,6 +142,12 @@ def singular_points(surface: Surface, box, level: int = 8) -> tuple[list[Singula
     """
     box = np.asarray(box, dtype=float)
     lo, hi = candidate_boxes(surface, box, level)
+    if avoid is not None and len(avoid) and len(lo):
+        from scipy.spatial import cKDTree
+
+        d, _ = cKDTree(avoid).query((lo + hi) / 2)
+        far = d > avoid_radius + float(np.linalg.norm(hi[0] - lo[0]))
+        lo, hi = lo[far], hi[far]
     # A curve of singular points makes a long chain of candidate boxes
     # with singular points all along it.  Starts in a chain are not points.
     on_curve = _curve_chains(surface, lo, hi, box)

@@ -28,7 +28,20 @@ GALLERY = ROOT / "gallery"
 CATALOGUE = GALLERY / "catalogue.toml"
 
 #: Entries built by the fixture, as --only substrings, and the names they select.
-ONLY = ["sphere", "cone", "cross-cap", "broken"]
+ONLY = ["sphere", "cone", "cross-cap", "labelled", "broken"]
+UNSUPPORTED_NAME = "Labelled unsupported"
+UNSUPPORTED = f'''
+
+[[entry]]
+name = "{UNSUPPORTED_NAME}"
+group = "unsupported"
+equation = "x^2 - y^2"
+box = [[-1.0, 1.0], [-1.0, 1.0], [-1.0, 1.0]]
+description = "Marked unsupported for the test: the page must label it so, with the reason."
+expected = []
+status = "unsupported"
+reason = "labelled unsupported on purpose"
+'''
 BROKEN_NAME = "Broken on purpose"
 BROKEN = f'''
 
@@ -69,7 +82,7 @@ def built(generate, tmp_path_factory):
     """Build the small gallery once; returns (out dir, report dict, exit status)."""
     tmp = tmp_path_factory.mktemp("gallery")
     catalogue = tmp / "catalogue.toml"
-    catalogue.write_text(CATALOGUE.read_text(encoding="utf-8") + BROKEN, encoding="utf-8")
+    catalogue.write_text(CATALOGUE.read_text(encoding="utf-8") + UNSUPPORTED + BROKEN, encoding="utf-8")
     out = tmp / "out"
     status = generate.main(["--catalogue", str(catalogue), "--out", str(out), "--only", *ONLY,
                             "--jobs", "2", "--size", str(SIZE), "--coarse", "16", "--fine", "64",
@@ -172,7 +185,7 @@ def test_catalogue_parses_and_is_complete(lib):
     assert len(by_name["Kummer quartic"].expected) == 16
     assert len(by_name["Togliatti quintic"].expected) == 31
     assert len(by_name["Barth sextic"].expected) == 50
-    assert not by_name["Cross-cap"].supported
+    assert by_name["Cross-cap"].supported and not by_name["Crixxi"].supported
 
 
 def test_catalogue_errors_are_reported(lib, generate, tmp_path, capsys):
@@ -207,7 +220,9 @@ def test_compare(lib):
     assert lib.compare(sphere, [], 2)["verdict"] == "match"
     assert lib.compare(sphere, [], 0)["verdict"] == "mismatch"
     crosscap = next(e for e in entries if e.name == "Cross-cap")
-    assert lib.compare(crosscap, [], 1)["verdict"] == "unsupported"
+    assert lib.compare(crosscap, [], 1)["verdict"] == "match"
+    crixxi = next(e for e in entries if e.name == "Crixxi")
+    assert lib.compare(crixxi, [], 1)["verdict"] == "unsupported"
 
 
 @pytest.mark.skipif(not hasattr(__import__("signal"), "setitimer"), reason="time limit needs SIGALRM")
@@ -225,7 +240,7 @@ def test_build_records_every_entry_in_order(built, lib):
     assert status == 0
     names = [r["name"] for r in report["entries"]]
     # catalogue order, whatever order the two processes finished in
-    assert names == ["Cone", "Sphere", "Cross-cap", BROKEN_NAME]
+    assert names == ["Cone", "Sphere", "Cross-cap", UNSUPPORTED_NAME, BROKEN_NAME]
     for r in report["entries"]:
         assert r["slug"] and r["comparison"]["verdict"] in ("match", "mismatch", "unsupported", "error")
     good = [r for r in report["entries"] if r["name"] != BROKEN_NAME]
@@ -296,9 +311,21 @@ def test_broken_entry_is_shown_with_its_error(built):
     assert html.escape(broken["error"]) in detail and "Traceback" in detail
 
 
-def test_unsupported_entry_is_labelled(built):
+def test_curves_are_recorded_and_drawn(built):
     out, report, _ = built
     cc = next(r for r in report["entries"] if r["name"] == "Cross-cap")
+    # x^2 y - z^2: the y-axis is a double line for y > 0, a pinch point at
+    # the origin, an isolated line for y < 0.
+    assert cc["ok"] and cc["comparison"]["verdict"] == "match"
+    assert {c["type"] for c in cc["curves"]} == {"A1 double curve", "A1 isolated line"}
+    pinch = [p["point"] for p in cc["special_points"] if p["kind"] == "pinch point"]
+    assert len(pinch) == 1 and max(abs(c) for c in pinch[0]) <= 1e-9
+    assert "A1 double curve" in cc["report_text"]
+
+
+def test_unsupported_entry_is_labelled(built):
+    out, report, _ = built
+    cc = next(r for r in report["entries"] if r["name"] == UNSUPPORTED_NAME)
     assert cc["ok"] and cc["comparison"]["verdict"] == "unsupported"
     card = _card((out / "index.html").read_text(encoding="utf-8"), cc["slug"])
     assert 'data-verdict="unsupported"' in card and "unsupported" in card and html.escape(cc["reason"]) in card

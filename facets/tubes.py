@@ -1,0 +1,243 @@
+"""Tubes: the leaves along curves of singular points, meshed as strips from the curve.
+
+The leaves within ``CURVE_TUBE_RADIUS`` fine cells of a singular curve,
+and the leaves next to them that failed the simplicity test (up to
+``CURVE_TUBE_GROW`` cells away), are one box: the tube.  Outside it every
+leaf is meshed as usual.  Each half-sheet of the surface through the curve
+leaves the tube across its boundary along a path of face links, a *rail*;
+inside the tube that half-sheet is the strip between its rail and the
+curve.  Zipping each rail to the curve (each rail vertex joined to the
+nearest curve vertex, the curve walked in between) meshes the strips:
+every curve edge gets one triangle per half-sheet (4 on a double curve,
+2 on a cuspidal edge, 6 on a triple curve), and no triangle joins two
+sheets, since a strip lies on one.  Curve edges no strip reaches (an
+isolated real line) are the one-dimensional part of the surface.
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+import numpy as np
+from scipy.spatial import cKDTree
+
+from singmesh import tolerances as tol
+from singmesh.boxes.octree import Octree
+
+
+def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
+    """Points along the curve graph's edges at most ``spacing`` apart."""
+    if len(edges) == 0:
+        return np.asarray(points, float).reshape(-1, 3)
+    a, b = points[edges[:, 0]], points[edges[:, 1]]
+    n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / spacing).astype(np.int64))
+    owner = np.repeat(np.arange(len(edges)), n)
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
+    return np.vstack([a[owner] + t[:, None] * (b - a)[owner], points])
+
+
+def tube_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
+                 pad: float, block: int = 8) -> np.ndarray:
+    """Boxes (k, 2, 3) covering the curve with ``pad`` fine cells to spare.
+
+    The blocks of ``block`` fine cells the curve passes through, widened:
+    few regions for a long curve (the subdivision tests every box against
+    every region).
+    """
+    cell = (tree_box[:, 1] - tree_box[:, 0]) / (1 << fine_level)
+    s = curve_samples(points, edges, 0.5 * float(cell.min()) * block)
+    lattice = np.floor((s - tree_box[:, 0]) / (cell * block)).astype(np.int64)
+    blocks = np.unique(lattice, axis=0)
+    lo = tree_box[:, 0] + blocks * cell * block - pad * cell
+    hi = lo + cell * block + 2 * pad * cell
+    return np.stack([lo, hi], axis=1)
+
+
+def tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
+                balls: np.ndarray | None = None) -> np.ndarray:
+    """Which leaves form the tube around the curve graph (points, edges).
+
+    Around the points ``balls`` (pinch and triple points, where sheets
+    meet tangentially and stay close further out) the non-simple leaves
+    join up to ``CURVE_BALL_GROW`` cells away.
+
+    Returns
+    -------
+    (N,) bool
+    """
+    n = len(tree.level)
+    inside = np.zeros(n, bool)
+    if len(points) == 0 or n == 0:
+        return inside
+    s = (curve_samples(points, edges, 0.25 * float(tree.cell.min())) - tree.box[:, 0]) / tree.cell
+    centre = tree.corner + tree.size[:, None] / 2.0
+    half = tree.size / 2.0
+    dist, _ = cKDTree(s).query(centre, p=np.inf, distance_upper_bound=float(half.max()) + tol.CURVE_TUBE_GROW + 1)
+    inside = dist <= half + tol.CURVE_TUBE_RADIUS
+    reach = dist <= half + tol.CURVE_TUBE_GROW
+    if balls is not None and len(balls):
+        b = (np.asarray(balls, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
+        d_ball, _ = cKDTree(b).query(centre, p=np.inf)
+        reach |= d_ball <= half + tol.CURVE_BALL_GROW
+    # Leaves that failed the simplicity test next to the tube join it:
+    # outside it every leaf must be a union of discs.
+    both = (links.minus >= 0) & (links.plus >= 0)
+    a, b = links.minus[both], links.plus[both]
+    for _ in range(int(max(tol.CURVE_TUBE_GROW, tol.CURVE_BALL_GROW)) + 1):
+        grow = np.zeros(n, bool)
+        grow[b[inside[a]]] = True
+        grow[a[inside[b]]] = True
+        grow &= ~inside & ~tree.simple & reach
+        if not grow.any():
+            break
+        inside |= grow
+    return inside
+
+
+def rails(box_links_arrays, links, tube_id: int) -> list[tuple[np.ndarray, bool]]:
+    """The tube's rails: paths of the links on its boundary inside the domain.
+
+    Parameters
+    ----------
+    box_links_arrays : (box, src, dst, square) from
+        :func:`singmesh.facets.cycles.box_links` with the tube grouped
+    links : FaceLinks
+    tube_id : int
+
+    Returns
+    -------
+    list of (events (k,) int64, closed)
+    """
+    box, src, dst, sq = box_links_arrays
+    mine = (box == tube_id) & (links.minus[sq] >= 0) & (links.plus[sq] >= 0)
+    src, dst = src[mine], dst[mine]
+    if len(src) == 0:
+        return []
+    nodes, inv = np.unique(np.concatenate([src, dst]), return_inverse=True)
+    a, b = inv[: len(src)], inv[len(src):]
+    m = len(nodes)
+    nxt = np.full(m, -1, np.int64)
+    nxt[a] = b
+    indeg = np.bincount(b, minlength=m)
+    outdeg = np.bincount(a, minlength=m)
+    used = np.zeros(m, bool)
+    out = []
+    starts = np.nonzero((outdeg > 0) & (indeg == 0))[0].tolist()
+    for first in starts + np.nonzero(outdeg > 0)[0].tolist():
+        if used[first]:
+            continue
+        path = [first]
+        used[first] = True
+        cur = first
+        closed = False
+        while nxt[cur] >= 0:
+            cur = int(nxt[cur])
+            if cur == first:
+                closed = True
+                break
+            if used[cur]:
+                break
+            used[cur] = True
+            path.append(cur)
+        if len(path) >= 2 or closed:
+            out.append((nodes[np.array(path)], closed))
+    return out
+
+
+def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray, curve_points: np.ndarray,
+                    curve_edges: np.ndarray, curve_keys: np.ndarray, box_ends: np.ndarray, reach: float,
+                    box: np.ndarray | None = None):
+    """Triangles zipping each rail to the curve.
+
+    Parameters
+    ----------
+    rail_list : list of (event indices, closed)
+    event_points, event_keys : positions and vertex keys of the events
+    curve_points, curve_edges, curve_keys : the curve graph and its vertex keys
+    box_ends : (k,) int64 curve vertices on the box's boundary
+    reach : float
+        A rail's end on the box is joined to a curve end on the box at most
+        this far away.
+    box : (3, 2) ndarray, optional
+        The domain: only rail ends on its boundary are joined so.
+
+    Returns
+    -------
+    keys : (T, 3) int64, points : (T, 3, 3) float
+        Triangles as vertex keys and positions, oriented as the rails are
+        (the side of F > 0 on the left seen from grad F).
+    """
+    if not rail_list or len(curve_points) == 0:
+        return np.zeros((0, 3), np.int64), np.zeros((0, 3, 3))
+    g = nx.Graph()
+    g.add_nodes_from(range(len(curve_points)))
+    d = np.linalg.norm(curve_points[curve_edges[:, 0]] - curve_points[curve_edges[:, 1]], axis=1)
+    g.add_weighted_edges_from(zip(curve_edges[:, 0].tolist(), curve_edges[:, 1].tolist(), d.tolist()))
+    tree = cKDTree(curve_points)
+    end_tree = cKDTree(curve_points[box_ends]) if len(box_ends) else None
+    tris: list[tuple] = []  # (vertex, vertex, vertex); vertex = ("e", event) or ("c", curve vertex)
+
+    def walk(u: int, v: int) -> list[int]:
+        if u == v:
+            return [u]
+        if g.has_edge(u, v):
+            return [u, v]
+        try:
+            return nx.shortest_path(g, u, v, weight="weight")
+        except nx.NetworkXNoPath:
+            return [u, v]
+
+    for events, closed in rail_list:
+        r = event_points[events]
+        _, snap = tree.query(r)
+        m = len(events)
+        steps = m if closed else m - 1
+        for i in range(steps):
+            j = (i + 1) % m
+            w = walk(int(snap[i]), int(snap[j]))
+            ri, rj = ("e", int(events[i])), ("e", int(events[j]))
+            k = len(w) - 1
+            if k == 0:
+                tris.append((ri, rj, ("c", w[0])))
+                continue
+            mid = (r[i] + r[j]) / 2
+            jm = int(np.argmin(np.linalg.norm(curve_points[w] - mid, axis=1)))
+            for l in range(k, jm, -1):
+                tris.append((rj, ("c", w[l]), ("c", w[l - 1])))
+            tris.append((ri, rj, ("c", w[jm])))
+            for l in range(jm, 0, -1):
+                tris.append((ri, ("c", w[l]), ("c", w[l - 1])))
+        if closed or end_tree is None:
+            continue
+        # The rail's ends lie on the box: the strip reaches the curve's end
+        # there (the cap edge from the rail's end to it is on the box).
+        for end, s in ((0, int(snap[0])), (m - 1, int(snap[-1]))):
+            dist, which = end_tree.query(r[end])
+            if dist > reach or (box is not None and not _on_boundary(r[end], box)):
+                continue
+            e = int(box_ends[which])
+            if e == s:
+                continue
+            w = walk(s, e)
+            re_ = ("e", int(events[end]))
+            if end == 0:   # ... s_0 -> ... -> e_0 -> r_0 -> r_1 ...
+                for l in range(len(w) - 1):
+                    tris.append((re_, ("c", w[l]), ("c", w[l + 1])))
+            else:          # ... r_m -> e_m -> ... -> s_m ...
+                w = w[::-1]
+                for l in range(len(w) - 1):
+                    tris.append((re_, ("c", w[l]), ("c", w[l + 1])))
+    if not tris:
+        return np.zeros((0, 3), np.int64), np.zeros((0, 3, 3))
+    kind = np.array([[v[0] == "e" for v in t] for t in tris])
+    idx = np.array([[v[1] for v in t] for t in tris], np.int64)
+    keys = np.where(kind, event_keys[np.where(kind, idx, 0)], curve_keys[np.where(kind, 0, idx)])
+    pts = np.where(kind[..., None], event_points[np.where(kind, idx, 0)], curve_points[np.where(kind, 0, idx)])
+    # Two rails of one half-sheet can snap to the same vertices: a triangle
+    # made twice is kept once; one whose corners coincide is dropped.
+    good = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2]) & (keys[:, 0] != keys[:, 2])
+    return keys[good], pts[good]
+
+
+def _on_boundary(p: np.ndarray, box: np.ndarray) -> bool:
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    return bool(np.any((np.abs(p - box[:, 0]) <= 1e-9 * size) | (np.abs(p - box[:, 1]) <= 1e-9 * size)))

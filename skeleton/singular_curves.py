@@ -1,0 +1,808 @@
+"""Curves of singular points: found, traced, typed, cut at their special points.
+
+The one-dimensional part of {F = grad F = 0} in the box, as polylines
+whose vertices lie on it to rounding (Gauss-Newton on (F, grad F), which
+has the curve as a manifold of solutions: steps across it only).
+
+1. Samples: Newton from the centres of the candidate boxes (where F and
+   its three derivatives may all vanish), all at once.
+2. Tracing: from an uncovered sample, predictor-corrector along the curve
+   (predict along the last chord, correct across it) both ways, until the
+   box's boundary or back at the start (a closed curve); samples near the
+   trace are covered.  Steps of ``CURVE_TRACE_STEP`` vertices, then every
+   step is divided by Newton on all its points at once.
+3. Crossings: where two traces meet (a triple point of the Roman surface),
+   the point where the Hessian's second singular value vanishes along one
+   of them, shared by both.
+4. Transversal type at every vertex: the plane curve singularity that F
+   cuts on the plane normal to the curve (A1 double curve or isolated
+   line, A2 cuspidal edge, A3 tacnode edge, D4 triple curve ...), read off
+   the 2 x 2 Hessian in that plane and the number of arcs of F = 0 on a
+   small circle in it.
+5. Special points: crossings, changes of type along a curve (a pinch
+   point where a double curve turns into an isolated line), ends on the
+   box.  The curves are cut there into pieces of one type each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import networkx as nx
+import numpy as np
+from scipy.spatial import cKDTree
+
+from singmesh import tolerances as tol
+from singmesh.surface import Surface
+
+from .centre import residual
+from .singular import candidate_boxes
+
+
+@dataclass(frozen=True, eq=False)
+class SpecialPoint:
+    """A point of a singular curve where its type changes or curves meet.
+
+    Attributes
+    ----------
+    point : (3,) ndarray
+    kind : str
+        ``"pinch point"``, ``"triple point"``, ``"crossing of curves"``,
+        ``"change of type"`` or ``"end on the box"``.
+    vertex : int or None
+        Index of the point in ``Mesh.curve_lines()[0]``: the mesh vertex,
+        or past the vertices for a point no triangle has (on an isolated
+        line).  Set by :func:`singmesh.mesh`.
+    """
+
+    point: np.ndarray
+    kind: str
+    vertex: int | None = None
+
+    def describe(self) -> str:
+        x, y, z = self.point
+        return f"({x:.10g}, {y:.10g}, {z:.10g})  {self.kind}"
+
+
+@dataclass(frozen=True, eq=False)
+class SingularCurve:
+    """One piece of a curve of singular points, of one transversal type.
+
+    Attributes
+    ----------
+    points : (n, 3) ndarray
+        The polyline, vertices on the curve to rounding.
+    type : str
+        Transversal type, e.g. ``"A1 double curve"``, ``"A2 cuspidal edge"``.
+    sheets : int
+        Sheets of the surface through the curve (0 for an isolated real
+        line, 1 for a cuspidal edge, 2 for a double or tacnode curve ...).
+    half_sheets : int
+        Arcs of F = 0 on a small circle around the curve: the triangles
+        each of its mesh edges has.
+    closed : bool
+    ends : tuple of int
+        Indices of the special points at its two ends (into
+        :attr:`CurveSet.special`), -1 for none (a closed curve).
+    vertices : (n,) int64 ndarray or None
+        Indices of ``points`` in ``Mesh.curve_lines()[0]`` (mesh vertices,
+        then the points no triangle has); set by :func:`singmesh.mesh`.
+    """
+
+    points: np.ndarray
+    type: str
+    sheets: int
+    half_sheets: int
+    closed: bool = False
+    ends: tuple = (-1, -1)
+    vertices: np.ndarray | None = None
+
+    @property
+    def length(self) -> float:
+        p = np.vstack([self.points, self.points[:1]]) if self.closed else self.points
+        return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+    def describe(self) -> str:
+        a, b = self.points[0], self.points[-1]
+        shape = "closed" if self.closed else f"from ({a[0]:.6g}, {a[1]:.6g}, {a[2]:.6g}) to ({b[0]:.6g}, {b[1]:.6g}, {b[2]:.6g})"
+        return (f"{self.type}: {len(self.points)} vertices, length {self.length:.6g}, {shape}, "
+                f"{self.sheets} sheet{'s' if self.sheets != 1 else ''}")
+
+
+@dataclass
+class CurveSet:
+    """All singular curves in the box as one graph, and their pieces.
+
+    Attributes
+    ----------
+    points : (n, 3) ndarray   vertices of the curve graph
+    edges : (m, 2) int64      its edges
+    pieces : list of SingularCurve
+    special : list of SpecialPoint
+    special_vertex : (k,) int64  graph vertex of each special point
+    """
+
+    points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    pieces: list = field(default_factory=list)
+    special: list = field(default_factory=list)
+    special_vertex: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    def __len__(self) -> int:
+        return len(self.pieces)
+
+
+# ---------------------------------------------------------------- samples
+def curve_samples(surface: Surface, box: np.ndarray, level: int) -> np.ndarray:
+    """Points of the singular locus near the candidate boxes at ``level``, one per box."""
+    lo, hi = candidate_boxes(surface, box, level)
+    if len(lo) == 0:
+        return np.zeros((0, 3))
+    h = float(np.max(hi[0] - lo[0]))
+    start = (lo + hi) / 2
+    x, ok = _correct(surface, start, None, 2 * h)
+    ok &= np.abs(x - start).max(axis=1) <= 2 * h
+    ok &= np.all((x >= box[:, 0] - 1e-9 * h) & (x <= box[:, 1] + 1e-9 * h), axis=1)
+    return x[ok]
+
+
+def _limit(surface: Surface) -> float:
+    from .singular import accept_residual
+
+    return max(accept_residual(surface), tol.CURVE_RESIDUAL)
+
+
+# ---------------------------------------------------------------- tracing
+def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
+    """Newton from points q (k, 3) onto the curve, steps orthogonal to ``across`` (k, 3).
+
+    Across a cuspidal or tacnode edge the root is multiple and Newton only
+    halves (or takes 2/3 of) the distance per step; each step is therefore
+    also tried two and three times as long, and the best kept (the
+    multiplicity's step), which restores fast convergence.
+    """
+    x = np.array(q, dtype=float)
+    k = len(x)
+    floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
+    with np.errstate(all="ignore"):
+        for _ in range(tol.CURVE_NEWTON):
+            f, g, hh = surface.jet(x)
+            r = np.concatenate([f[:, None], g], axis=1)
+            j = np.concatenate([g[:, None, :], hh], axis=1)
+            step = _least_squares(j, r, floor, drop_smallest=across is None)
+            if across is not None:
+                step -= np.einsum("ki,ki->k", step, across)[:, None] * across
+            length = np.linalg.norm(step, axis=1, keepdims=True)
+            if not np.any(length > tol.CURVE_STOP * h):
+                break  # converged (or stuck) everywhere
+            step *= np.minimum(1.0, 0.5 * h / np.maximum(length, 1e-300))
+            # Without a direction held fixed, longer steps could slide
+            # along the curve: plain steps then.
+            factors = np.array([1.0, 2.0, 3.0]) if across is not None else np.ones(1)
+            trials = x[None] - factors[:, None, None] * step[None]
+            fz, gz = surface(trials), surface.gradient(trials)
+            norm = np.abs(fz) + np.abs(gz).sum(axis=-1)
+            norm = np.where(np.isfinite(norm), norm, np.inf)
+            best = np.argmin(norm, axis=0)
+            x = trials[best, np.arange(k)]
+        ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
+        ok[ok] = residual(surface, x[ok]) <= _limit(surface)
+    return x, ok
+
+
+def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bool = False) -> np.ndarray:
+    """Minimum-norm least-squares steps j^+ r, singular values below ``floor`` dropped.
+
+    Near a curve of singular points the Jacobian of (F, grad F) has a
+    singular value of rounding size along the curve (exactly zero for
+    exact input); inverting it would throw the point far along the curve.
+    With ``drop_smallest`` the smallest is always dropped: the step goes
+    across the curve, whose tangent that singular vector estimates.
+    """
+    u, sv, vt = np.linalg.svd(j, full_matrices=False)
+    cut = np.maximum(1e-12 * sv[:, :1], floor)
+    keep = sv > cut
+    if drop_smallest:
+        keep[:, -1] = False
+    inv = np.where(keep, 1.0 / np.where(keep, sv, 1.0), 0.0)
+    return np.einsum("kji,kj,kj->ki", vt, inv, np.einsum("kij,ki->kj", u, r))
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / max(float(np.linalg.norm(v)), 1e-300)
+
+
+def _inside(box: np.ndarray, p: np.ndarray) -> bool:
+    return bool(np.all((p >= box[:, 0]) & (p <= box[:, 1])))
+
+
+def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: float):
+    """The point of the curve on the box's boundary between x (inside) and y (outside)."""
+    d = y - x
+    with np.errstate(all="ignore"):
+        s_lo = np.where(d < 0, (box[:, 0] - x) / d, np.inf)
+        s_hi = np.where(d > 0, (box[:, 1] - x) / d, np.inf)
+    s = np.minimum(s_lo, s_hi)
+    axis = int(np.argmin(s))
+    q = x + min(float(s[axis]), 1.0) * d
+    value = box[axis, 0] if d[axis] < 0 else box[axis, 1]
+    e = np.zeros(3)
+    e[axis] = 1.0
+    q[axis] = value
+    z, ok = _correct(surface, q[None], e[None], h)
+    z = z[0]
+    z[axis] = value
+    if not ok[0] or not _inside(box, z + 0 * e):
+        z = np.clip(z, box[:, 0], box[:, 1])
+    return z
+
+
+def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,
+                   earlier: cKDTree | None = None, earlier_points: np.ndarray | None = None,
+                   earlier_tangents: np.ndarray | None = None):
+    """Vertices from x0 along t0 (x0 excluded) and how the trace ended.
+
+    It ends on the box's boundary ("box"), back at x0 ("closed"), where
+    Newton loses the curve ("lost"), or on reaching an earlier trace
+    ("joined", its vertex appended: a crossing, or a curve traced from
+    both ends).
+    """
+    pts = [x0]
+    t = t0
+    for n in range(max_steps):
+        x = pts[-1]
+        y = None
+        for scale in (1.0, 0.5, 0.25):
+            q = x + scale * h * t
+            z, ok = _correct(surface, q[None], t[None], scale * h)
+            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
+                y = z[0]
+                break
+        if y is None:
+            return pts[1:], "lost"
+        if not _inside(box, y):
+            pts.append(_clip(surface, box, x, y, h))
+            return pts[1:], "box"
+        if len(pts) > 3 and np.linalg.norm(y - x0) < 0.75 * h:
+            return pts[1:], "closed"
+        if earlier is not None and n > 0:
+            d, i = earlier.query(y)
+            if d < 0.5 * h and abs(np.dot(earlier_tangents[i], _unit(y - x))) > 0.9:
+                # Running along an earlier trace (not across it, as at a
+                # crossing): the same curve, traced from its other end.
+                pts.append(earlier_points[i])
+                return pts[1:], "joined"
+        t = _unit(y - x)
+        pts.append(y)
+    return pts[1:], "lost"
+
+
+def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: float) -> list[tuple[np.ndarray, bool]]:
+    """Polylines (points, closed) through all ``samples``, vertices ``h`` apart.
+
+    Traces that lose the curve (near a special point Newton cannot pass,
+    where two cuspidal edges meet) are joined at a point of the singular
+    locus between their ends.
+    """
+    box = np.asarray(box, float)
+    if len(samples) == 0:
+        return []
+    order = np.lexsort(samples.T[::-1])
+    samples = samples[order]
+    tree = cKDTree(samples)
+    covered = np.zeros(len(samples), bool)
+    diameter = float(np.linalg.norm(box[:, 1] - box[:, 0]))
+    max_steps = int(8 * diameter / h) + 16
+    spread = 3.0 * h
+    out = []
+    lost = []  # (line, end) of traces that lost the curve
+    earlier_points = np.zeros((0, 3))
+    earlier_tangents = np.zeros((0, 3))
+    earlier = None
+    for i in range(len(samples)):
+        if covered[i]:
+            continue
+        x0 = samples[i]
+        near = samples[tree.query_ball_point(x0, spread)]
+        covered[i] = True
+        if len(near) < 3:
+            continue
+        t0 = _principal(near)
+        fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
+        back, how_b = ([], "closed") if how_f == "closed" else \
+            _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
+        pts = np.array(back[::-1] + [x0] + fwd)
+        if len(pts) < 2:
+            # No curve through it (an isolated point's samples): its
+            # neighbours need no trace either.
+            covered[tree.query_ball_point(x0, spread)] = True
+            continue
+        for idx in tree.query_ball_point(pts, 1.5 * h):
+            covered[idx] = True
+        k = len(out)
+        out.append((pts, how_f == "closed"))
+        if how_b == "lost":
+            lost.append((k, 0))
+        if how_f == "lost":
+            lost.append((k, -1))
+        tangent = np.gradient(pts, axis=0) if len(pts) > 1 else np.zeros_like(pts)
+        tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-300)
+        earlier_points = np.vstack([earlier_points, pts])
+        earlier_tangents = np.vstack([earlier_tangents, tangent])
+        earlier = cKDTree(earlier_points)
+    return _join_lost(surface, out, lost, h)
+
+
+def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
+    """Lines whose trace was lost, joined at a singular point between their ends."""
+    if not lost:
+        return lines
+    ends = np.array([lines[k][0][e] for k, e in lost])
+    pairs = cKDTree(ends).query_pairs(tol.CURVE_JOIN * h, output_type="ndarray")
+    g = nx.Graph()
+    g.add_nodes_from(range(len(lost)))
+    g.add_edges_from(pairs.tolist())
+    lines = [(p.copy(), c) for p, c in lines]
+    for comp in sorted(nx.connected_components(g), key=min):
+        comp = sorted(comp)
+        if len(comp) < 2:
+            continue
+        start = ends[comp].mean(axis=0)
+        z, ok = _correct(surface, start[None], None, tol.CURVE_JOIN * h)
+        meet = z[0] if ok[0] else start
+        for c in comp:
+            k, e = lost[c]
+            p, closed = lines[k]
+            lines[k] = (np.vstack([meet[None], p]) if e == 0 else np.vstack([p, meet[None]]), closed)
+    return lines
+
+
+def _principal(points: np.ndarray) -> np.ndarray:
+    return np.linalg.svd(points - points.mean(axis=0), full_matrices=False)[2][0]
+
+
+def densify(surface: Surface, polylines: list, pieces: int) -> list:
+    """Each step of each polyline divided into ``pieces`` by Newton across its chord, all at once."""
+    if pieces <= 1 or not polylines:
+        return polylines
+    starts, chords, owners = [], [], []
+    for k, (p, closed) in enumerate(polylines):
+        q = np.vstack([p, p[:1]]) if closed else p
+        a, b = q[:-1], q[1:]
+        for j in range(1, pieces):
+            starts.append(a + (j / pieces) * (b - a))
+            chords.append(np.broadcast_to(0, a.shape) + (b - a))
+            owners.append(np.stack([np.full(len(a), k), np.arange(len(a)), np.full(len(a), j)], 1))
+    q = np.concatenate(starts)
+    d = np.concatenate(chords)
+    owner = np.concatenate(owners)
+    length = np.linalg.norm(d, axis=1)
+    t = d / np.maximum(length, 1e-300)[:, None]
+    x, ok = _correct(surface, q, t, float(length.max()) / pieces)
+    out = []
+    for k, (p, closed) in enumerate(polylines):
+        mine = owner[:, 0] == k
+        n_seg = len(p) if closed else len(p) - 1
+        grid = np.zeros((n_seg, pieces, 3))
+        good = np.ones((n_seg, pieces), bool)
+        grid[:, 0] = p[:n_seg]
+        grid[owner[mine, 1], owner[mine, 2]] = x[mine]
+        good[owner[mine, 1], owner[mine, 2]] = ok[mine]
+        # A point Newton could not put on the curve is left out.
+        dense = grid.reshape(-1, 3)[good.ravel()]
+        if not closed:
+            dense = np.vstack([dense, p[-1:]])
+        out.append((dense, closed))
+    return out
+
+
+# ---------------------------------------------------------------- crossings
+def _second_singular_value(surface: Surface, x: np.ndarray) -> np.ndarray:
+    return np.linalg.svd(surface.hessian(x), compute_uv=False)[..., 1]
+
+
+def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.ndarray:
+    """Where the Hessian's second singular value vanishes along polyline ``p`` near vertex i."""
+    a, b = p[max(i - 2, 0)], p[min(i + 2, len(p) - 1)]
+    t = _unit(b - a)
+
+    def point(s):
+        z, _ = _correct(surface, (p[i] + s * t)[None], t[None], 2 * h)
+        return z[0]
+
+    lo, hi = -2.0 * h, 2.0 * h
+    g = (np.sqrt(5.0) - 1) / 2
+    c, d = hi - g * (hi - lo), lo + g * (hi - lo)
+    fc, fd = _second_singular_value(surface, point(c)), _second_singular_value(surface, point(d))
+    for _ in range(tol.CURVE_CROSSING_STEPS):
+        if fc <= fd:
+            hi, d, fd = d, c, fc
+            c = hi - g * (hi - lo)
+            fc = _second_singular_value(surface, point(c))
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + g * (hi - lo)
+            fd = _second_singular_value(surface, point(d))
+    return point((lo + hi) / 2)
+
+
+def _graph(polylines: list, surface: Surface, h: float):
+    """One vertex array and edge list for all polylines, crossings merged into shared vertices."""
+    pts, edges, line_of = [], [], []
+    base = 0
+    for k, (p, closed) in enumerate(polylines):
+        n = len(p)
+        pts.append(p)
+        line_of.append(np.full(n, k))
+        idx = base + np.arange(n)
+        e = np.stack([idx[:-1], idx[1:]], 1)
+        if closed:
+            e = np.vstack([e, [[idx[-1], idx[0]]]])
+        edges.append(e)
+        base += n
+    P = np.concatenate(pts)
+    E = np.concatenate(edges)
+    line = np.concatenate(line_of)
+    local = np.concatenate([np.arange(len(p)) for p, _ in polylines])
+    arc, total = [], np.zeros(len(polylines))
+    for k, (p, closed) in enumerate(polylines):
+        a = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+        total[k] = a[-1] + (np.linalg.norm(p[-1] - p[0]) if closed else np.inf)
+        arc.append(a)
+    arc = np.concatenate(arc)
+    # Vertices of different traces (or far apart along one) closer than
+    # a step: a crossing.  Each cluster of them becomes one vertex.
+    pairs = cKDTree(P).query_pairs(1.0 * h, output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        along = np.abs(arc[i] - arc[j])
+        along = np.minimum(along, total[line[i]] - along)
+        far = (line[i] != line[j]) | (along > 3.0 * h)
+        pairs = pairs[far]
+    crossings = []
+    if len(pairs):
+        g = nx.Graph()
+        g.add_edges_from(pairs.tolist())
+        for comp in sorted(nx.connected_components(g), key=min):
+            comp = sorted(comp)
+            i = comp[0]
+            k = line[i]
+            p = polylines[k][0]
+            x = _crossing_point(surface, p, int(local[i]), h)
+            # All members within a step of the crossing (on every trace)
+            # become that one vertex.
+            near = np.nonzero(np.linalg.norm(P - x, axis=1) <= 0.75 * h)[0]
+            members = sorted(set(comp) | set(near.tolist()))
+            # Keep at most the nearest vertex of each trace near x.
+            keep = {}
+            for m in members:
+                keep.setdefault(int(line[m]), []).append(m)
+            chosen = []
+            for lm in keep.values():
+                lm.sort(key=lambda m: np.linalg.norm(P[m] - x))
+                chosen.append(lm[0])
+            crossings.append((x, chosen))
+    remap = np.arange(len(P))
+    # Points that coincide (a trace clipped twice at the same place on the
+    # box) are one vertex.
+    same = cKDTree(P).query_pairs(tol.SINGULAR_MERGE * h, output_type="ndarray")
+    for i, j in sorted(same.tolist(), reverse=True):
+        remap[remap == max(i, j)] = remap[min(i, j)]
+    for x, chosen in crossings:
+        target = chosen[0]
+        P[target] = x
+        remap[np.isin(remap, remap[chosen])] = remap[target]
+    E = remap[E]
+    E = E[E[:, 0] != E[:, 1]]
+    E = np.unique(np.sort(E, axis=1), axis=0)
+    used = np.zeros(len(P), bool)
+    used[E.ravel()] = True
+    new = np.cumsum(used) - 1
+    cross_vertices = np.unique([new[remap[c[0]]] for _, c in crossings]).astype(np.int64) if crossings else np.zeros(0, np.int64)
+    return P[used], new[E], cross_vertices
+
+
+# ---------------------------------------------------------------- types
+def _tangents(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Unit tangent at each graph vertex (from its neighbours; any at a crossing)."""
+    t = np.zeros_like(points)
+    d = points[edges[:, 1]] - points[edges[:, 0]]
+    # Orient every edge the same way as the first of its vertex's edges
+    # (a path's edges in order do): sum with signs against the first.
+    ref = np.zeros_like(points)
+    first = np.full(len(points), -1)
+    for k, (a, b) in enumerate(edges.tolist()):
+        for v, s in ((a, 1.0), (b, 1.0)):
+            if first[v] < 0:
+                first[v] = k
+                ref[v] = s * d[k]
+    for k, (a, b) in enumerate(edges.tolist()):
+        for v in (a, b):
+            sgn = 1.0 if np.dot(d[k], ref[v]) >= 0 else -1.0
+            t[v] += sgn * d[k]
+    norm = np.linalg.norm(t, axis=1, keepdims=True)
+    return np.where(norm > 0, t / np.maximum(norm, 1e-300), np.array([1.0, 0, 0]))
+
+
+def transversal_types(surface: Surface, points: np.ndarray, tangents: np.ndarray, radius: float):
+    """Transversal type of the curve at each point: (names, sheets, half_sheets).
+
+    In the plane normal to the tangent, G(u, v) = F(p + u n1 + v n2) has a
+    plane curve singularity at 0.  The 2 x 2 Hessian of G gives its rank
+    (2: A1, with det < 0 two real sheets, det > 0 an isolated real line;
+    1: A_k, k >= 2; 0: D4 and beyond); the arcs of G = 0 on the circle of
+    ``radius`` give the half-sheets (2: a cuspidal edge, 4: a tacnode
+    edge, 6: three sheets).
+    """
+    k = len(points)
+    if k == 0:
+        return [], np.zeros(0, np.int64), np.zeros(0, np.int64)
+    t = tangents
+    helper = np.where(np.abs(t[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    n1 = np.cross(t, helper)
+    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    n2 = np.cross(t, n1)
+    h = surface.hessian(points)
+    N = np.stack([n1, n2], axis=2)  # (k, 3, 2)
+    hn = np.einsum("kia,kij,kjb->kab", N, h, N)
+    lam = np.linalg.eigvalsh(hn)  # ascending
+    big = np.abs(lam).max(axis=1)
+    small = np.abs(lam).min(axis=1)
+    scale = np.abs(h).max(axis=(1, 2))
+    theta = np.linspace(0, 2 * np.pi, tol.CURVE_CIRCLE_SAMPLES, endpoint=False)
+    ring = radius * (np.cos(theta)[None, :, None] * n1[:, None, :] + np.sin(theta)[None, :, None] * n2[:, None, :])
+    g = surface(points[:, None, :] + ring)
+    sign = g >= 0  # a zero counts as positive (F + eps)
+    arcs = (sign != np.roll(sign, 1, axis=1)).sum(axis=1)
+    coeff = np.abs(surface.coeffs).max()
+    names, sheets = [], np.zeros(k, np.int64)
+    for i in range(k):
+        a = int(arcs[i])
+        if big[i] <= tol.CURVE_RANK_RTOL * coeff:
+            rank = 0
+        elif small[i] <= tol.CURVE_RANK_RTOL * max(big[i], scale[i]):
+            rank = 1
+        else:
+            rank = 2
+        if rank == 2:
+            if lam[i, 0] * lam[i, 1] < 0:
+                name, s = "A1 double curve", 2
+            else:
+                name, s = "A1 isolated line", 0
+        elif rank == 1:
+            name, s = {2: ("A2 cuspidal edge", 1), 4: ("A3 tacnode edge", 2), 0: ("A3 isolated line", 0)}.get(
+                a, (f"A_k edge, {a // 2} sheets", a // 2))
+        else:
+            name, s = {6: ("D4 triple curve", 3), 2: ("D4 edge, one real sheet", 1)}.get(
+                a, (f"corank 2 edge, {a} arcs", a // 2))
+        names.append(name)
+        sheets[i] = s
+    return names, sheets, arcs.astype(np.int64)
+
+
+# ---------------------------------------------------------------- all of it
+def singular_curves(surface: Surface, box, step: float, level: int = 6) -> CurveSet:
+    """The curves of singular points in ``box``, with vertices ``step`` apart.
+
+    Parameters
+    ----------
+    surface : Surface
+    box : (3, 2) array_like
+    step : float
+        Spacing of the curve's vertices (the mesh's fine cell).
+    level : int
+        Depth of the candidate search for samples.
+
+    Returns
+    -------
+    CurveSet
+    """
+    box = np.asarray(box, dtype=float)
+    samples = curve_samples(surface, box, level)
+    k = max(1, tol.CURVE_TRACE_STEP)
+    # Samples of isolated points gather in small clusters: only clusters
+    # longer than a few trace steps can hold a curve.
+    samples = _long_clusters(samples, float(np.max(box[:, 1] - box[:, 0])) / (1 << level),
+                             tol.CURVE_MIN_STEPS * k * step)
+    if len(samples) < 3:
+        return CurveSet()
+    lines = trace_curves(surface, box, samples, k * step)
+    lines = [(p, c) for p, c in lines if _extent(p) >= tol.CURVE_MIN_STEPS * k * step]
+    if not lines:
+        return CurveSet()
+    lines = densify(surface, lines, k)
+    P, E, cross = _graph(lines, surface, step)
+    T = _tangents(P, E)
+    names, sheets, arcs = transversal_types(surface, P, T, tol.CURVE_CIRCLE_RADIUS * step)
+    return _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
+
+
+def _long_clusters(x: np.ndarray, gap: float, length: float) -> np.ndarray:
+    """The points in clusters (single linkage at ``2 gap``) that extend over ``length`` at least."""
+    if len(x) < 3:
+        return x
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pairs = cKDTree(x).query_pairs(2.0 * gap, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(x), len(x)))
+    n, label = connected_components(graph, directed=False)
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, label, x)
+    np.maximum.at(hi, label, x)
+    long = (hi - lo).max(axis=1) >= length
+    return x[long[label]]
+
+
+def _extent(p: np.ndarray) -> float:
+    return float(np.ptp(p, axis=0).max()) if len(p) else 0.0
+
+
+def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
+    """Cut the graph at crossings, type changes and box ends; one SingularCurve per piece."""
+    g = nx.Graph()
+    g.add_nodes_from(range(len(P)))
+    g.add_edges_from(E.tolist())
+    deg = np.array([g.degree(v) for v in range(len(P))])
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    on_box = np.any((np.abs(P - box[:, 0]) <= 1e-9 * size) | (np.abs(P - box[:, 1]) <= 1e-9 * size), axis=1)
+    special: dict[int, str] = {}
+    for v in cross.tolist():
+        special[v] = "triple point" if deg[v] >= 6 else "crossing of curves"
+    for v in np.nonzero(deg != 2)[0].tolist():
+        if v not in special:
+            special[v] = "end on the box" if on_box[v] else ("crossing of curves" if deg[v] > 2 else "end of the trace")
+    names = list(names)
+    P = P.copy()
+    for v in np.nonzero(deg == 2)[0].tolist():
+        if v in special:
+            continue
+        a, b = list(g.neighbors(v))
+        if names[a] == names[b] and names[v] != names[a]:
+            names[v] = names[a]  # one vertex read otherwise: noise
+        elif names[a] != names[b] and names[v] not in (names[a], names[b]):
+            # A vertex of lower rank between two types: the special point
+            # itself (a pinch point on a split plane).
+            special[v] = "pinch point" if {names[a], names[b]} == {"A1 double curve", "A1 isolated line"} \
+                else "change of type"
+            # ... placed exactly: its neighbours bracket the change.
+            P[v] = _type_change(surface, P[a], P[b], names[a], names[b], step)
+    # Changes of type along an edge: the special point is placed there.
+    extra_pts, extra_names, extra_sheets, extra_arcs = [], [], [], []
+    new_edges = []
+    n = len(P)
+    for a, b in E.tolist():
+        if names[a] == names[b] or a in special or b in special:
+            new_edges.append((a, b))
+            continue
+        x = _type_change(surface, P[a], P[b], names[a], names[b], step)
+        v = n + len(extra_pts)
+        extra_pts.append(x)
+        pinch = {names[a], names[b]} == {"A1 double curve", "A1 isolated line"}
+        extra_names.append("pinch point" if pinch else "change of type")
+        extra_sheets.append(0)
+        extra_arcs.append(0)
+        special[v] = "pinch point" if pinch else "change of type"
+        new_edges += [(a, v), (v, b)]
+    if extra_pts:
+        P = np.vstack([P, extra_pts])
+        names = list(names) + extra_names
+        sheets = np.concatenate([sheets, extra_sheets])
+        arcs = np.concatenate([arcs, extra_arcs])
+    E = np.array(new_edges, np.int64).reshape(-1, 2)
+    # A vertex next to a special point placed between two vertices is
+    # merged into it (no edge of a fraction of a step).
+    remap = np.arange(len(P))
+    sp_list = list(special)
+    for a, b in E.tolist():
+        for u, w in ((a, b), (b, a)):
+            if u in special and w not in special and np.linalg.norm(P[u] - P[w]) < tol.CURVE_MERGE * step:
+                remap[w] = u
+    E = remap[E]
+    E = np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0)
+    del sp_list
+    # Only the vertices still on an edge (or special) remain.
+    used = np.zeros(len(P), bool)
+    used[E.ravel()] = True
+    used[list(special)] = True
+    new = np.cumsum(used) - 1
+    P, E = P[used], new[E]
+    names = [nm for nm, u in zip(names, used) if u]
+    sheets, arcs = sheets[used], arcs[used]
+    special = {int(new[v]): kind for v, kind in special.items()}
+    g = nx.Graph()
+    g.add_nodes_from(range(len(P)))
+    g.add_edges_from(E.tolist())
+    sp_vertices = sorted(special)
+    sp_index = {v: i for i, v in enumerate(sp_vertices)}
+    specials = [SpecialPoint(point=P[v].copy(), kind=special[v]) for v in sp_vertices]
+    pieces = []
+    seen = set()
+    for a, b in sorted(E.tolist()):
+        if (a, b) in seen or (b, a) in seen:
+            continue
+        path = _walk(g, a, b, special, seen)
+        closed = path[0] == path[-1] and path[0] not in special
+        verts = path[:-1] if closed else path
+        inner = [v for v in verts if v not in special] or verts
+        kinds = [names[v] for v in inner]
+        name = max(set(kinds), key=kinds.count)
+        s = int(np.median([sheets[v] for v in inner]))
+        half = int(np.median([arcs[v] for v in inner]))
+        ends = (-1, -1) if closed else (sp_index.get(path[0], -1), sp_index.get(path[-1], -1))
+        pieces.append(SingularCurve(points=P[verts], type=name, sheets=s, half_sheets=half, closed=closed,
+                                    ends=ends, vertices=np.asarray(verts, np.int64)))
+    return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
+                    special_vertex=np.asarray(sp_vertices, np.int64))
+
+
+def _walk(g: nx.Graph, a: int, b: int, special: dict, seen: set) -> list[int]:
+    """The path through edge (a, b) between special vertices (or round a loop)."""
+    seen.add((a, b))
+
+    def extend(prev, cur, stop):
+        out = []
+        while cur not in special and cur != stop:
+            nxt = [w for w in g.neighbors(cur) if w != prev]
+            if len(nxt) != 1:
+                break
+            w = nxt[0]
+            seen.add((cur, w))
+            out.append(w)
+            prev, cur = cur, w
+        return out
+
+    forward = extend(a, b, a)
+    path = [a, b] + forward
+    if path[-1] == a:
+        return path
+    backward = extend(b, a, path[-1])
+    return backward[::-1] + path
+
+
+def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, name_b: str, step: float) -> np.ndarray:
+    """Where the transversal type changes between two vertices of a curve: bisection."""
+    t = _unit(b - a)
+
+    def point(u):
+        z, _ = _correct(surface, (a + u * (b - a))[None], t[None], step)
+        return z[0]
+
+    length = float(np.linalg.norm(b - a))
+    if name_a.startswith("A1") and name_b.startswith("A1"):
+        # A pinch point: the determinant of the normal Hessian changes
+        # sign there: bisection on its sign, to rounding.
+        lo, hi = 0.0, 1.0
+        sign_lo = np.sign(_normal_det(surface, a, t))
+        x = a
+        while (hi - lo) * length > tol.CURVE_PLACE * step:
+            mid = (lo + hi) / 2
+            x = point(mid)
+            f = np.sign(_normal_det(surface, x, t))
+            if f == 0:
+                break
+            if f == sign_lo:
+                lo = mid
+            else:
+                hi = mid
+        return x
+    # Otherwise the type itself is bisected, to where it is read reliably.
+    lo, hi = 0.0, 1.0
+    x = a
+    while (hi - lo) * length > tol.CURVE_TYPE_PLACE * step:
+        mid = (lo + hi) / 2
+        x = point(mid)
+        if transversal_types(surface, x[None], t[None], tol.CURVE_CIRCLE_RADIUS * step)[0][0] == name_a:
+            lo = mid
+        else:
+            hi = mid
+    return x
+
+
+def _normal_det(surface: Surface, x: np.ndarray, t: np.ndarray) -> float:
+    helper = np.array([1.0, 0, 0]) if abs(t[0]) < 0.9 else np.array([0, 1.0, 0])
+    n1 = _unit(np.cross(t, helper))
+    n2 = np.cross(t, n1)
+    N = np.stack([n1, n2], axis=1)
+    return float(np.linalg.det(N.T @ surface.hessian(x) @ N))

@@ -1,0 +1,298 @@
+"""Curves of singular points, checked independently of the mesher.
+
+The surfaces are the classical ones with a singular curve (the Whitney
+umbrella, the cross-cap, Steiner's Roman surface, a sphere through a
+plane, three planes through a line, cylinders over plane curve
+singularities, two cylinders crossing), as typed and under random float
+rotations and shifts written with 15 digits.  What is checked trusts only
+the equation:
+
+- samples of {F = grad F = 0} from Gauss-Newton at random starts (numpy
+  on sympy's derivatives, not the mesher's) lie on mesh edges whose two
+  ends are singular vertices, or on the exported line cells;
+- edges of more than two triangles are on the curve and have an even count;
+  the number of triangles at the curve's edges is the number of half-sheets
+  the normal form has (4 on a double curve, 2 on a cuspidal edge, 6 on a
+  triple line);
+- no open edge inside the box, and the expected number of pieces;
+- vertices on the surface, and every triangle near a dense marching-cubes
+  sample of F = 0 (scikit-image; skipped where absent);
+- special points where the literature puts them (the Roman surface's
+  triple point and six pinch points, the umbrella's pinch point).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import warnings
+
+import numpy as np
+import pytest
+import sympy
+from scipy.spatial import cKDTree
+
+import meshcheck as mc
+import singmesh
+from singmesh.surface import Surface, X, Y, Z
+
+BOX1 = ((-1.0, 1.0),) * 3
+
+
+def float_rotated(text: str, seed: int, shift_size: float = 0.2) -> str:
+    """``text`` composed with a random orthogonal matrix (numpy qr) and shift, 15 significant digits."""
+    rng = np.random.default_rng(seed)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    shift = rng.uniform(-shift_size, shift_size, 3)
+    e = Surface.parse(text).expr
+    u = [sum(sympy.Float(q[i, j], 17) * ((X, Y, Z)[j] - sympy.Float(shift[j], 17)) for j in range(3))
+         for i in range(3)]
+    poly = sympy.Poly(sympy.expand(e.subs({X: u[0], Y: u[1], Z: u[2]}, simultaneous=True)), X, Y, Z)
+    return " ".join(f"{float(c):+.15g}" + "".join(f" {v}^{n}" for v, n in (("x", i), ("y", j), ("z", k)) if n)
+                    for (i, j, k), c in poly.terms())
+
+
+def lambdas(text: str):
+    """F, grad F and the Jacobian of (F, grad F) as numpy functions of (n, 3) points."""
+    e = Surface.parse(text).expr
+    eqs = [e] + [sympy.diff(e, v) for v in (X, Y, Z)]
+    jac = [[sympy.diff(q, v) for v in (X, Y, Z)] for q in eqs]
+    f = sympy.lambdify((X, Y, Z), eqs, "numpy")
+    j = sympy.lambdify((X, Y, Z), jac, "numpy")
+
+    def stack(values, n):
+        return np.stack([np.broadcast_to(np.asarray(v, float), (n,)) for v in values], axis=-1)
+
+    def F(p):
+        return stack(f(*p.T), len(p))[:, 0]
+
+    def G(p):
+        return stack(f(*p.T), len(p))[:, 1:]
+
+    def R(p):
+        return stack(f(*p.T), len(p))
+
+    def J(p):
+        return np.stack([stack(row, len(p)) for row in j(*p.T)], axis=1)
+
+    return F, G, R, J
+
+
+def singular_locus(text: str, box, starts: int = 3000, seed: int = 5) -> np.ndarray:
+    """Points of {F = grad F = 0} in the box: damped least squares from random starts, converged ones."""
+    _, _, R, J = lambdas(text)
+    box = np.asarray(box, float)
+    rng = np.random.default_rng(seed)
+    p = box[:, 0] + rng.random((starts, 3)) * (box[:, 1] - box[:, 0])
+    for _ in range(80):
+        r, jm = R(p), J(p)
+        # Levenberg-Marquardt steps, all starts at once.
+        jt = np.transpose(jm, (0, 2, 1))
+        a = jt @ jm + 1e-12 * np.eye(3)
+        step = np.linalg.solve(a, -(jt @ r[..., None]))[..., 0]
+        p = p + np.clip(step, -0.1, 0.1)
+    r = np.abs(R(p)).max(axis=1)
+    ok = np.isfinite(p).all(axis=1) & (r < 1e-10) & np.all((p >= box[:, 0]) & (p <= box[:, 1]), axis=1)
+    p = p[ok]
+    # Curves only: a point with others along a curve near it.
+    if len(p) < 3:
+        return p[:0]
+    tree = cKDTree(p)
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    near = np.array([len(tree.query_ball_point(q, 0.05 * size)) for q in p])
+    return p[near >= 3]
+
+
+def segment_distance(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from each point of x to the nearest of the segments a-b."""
+    out = np.empty(len(x))
+    d = b - a
+    dd = np.maximum((d * d).sum(axis=1), 1e-300)
+    for i in range(0, len(x), 256):
+        q = x[i:i + 256, None, :]
+        t = np.clip(((q - a) * d).sum(axis=2) / dd, 0, 1)
+        out[i:i + 256] = np.linalg.norm(q - (a + t[..., None] * d), axis=2).min(axis=1)
+    return out
+
+
+def mesh_quiet(text, box, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", singmesh.SingularPointWarning)
+        return singmesh.mesh(text, box, **kw)
+
+
+def check_curve_mesh(text, box, components=1, half_sheets=None):
+    """The independent checks of the module docstring; returns the mesh and its line cells."""
+    m = mesh_quiet(text, box)
+    mm = m.to_meshio()
+    V = np.asarray(mm.points, float)
+    T = np.concatenate([c.data for c in mm.cells if c.type == "triangle"])
+    L = [c.data for c in mm.cells if c.type == "line"]
+    L = np.concatenate(L) if L else np.zeros((0, 2), np.int64)
+    F, G, _, _ = lambdas(text)
+    box = np.asarray(box, float)
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    g = np.linalg.norm(G(V), axis=1)
+    scale = float(np.median(g[g > 0]))
+    singular = g <= 1e-6 * scale
+    # Vertices on the surface: regular ones to 1e-9 of the box along the
+    # gradient, singular ones with F at rounding level.
+    regular = ~singular
+    assert (np.abs(F(V[regular])) / g[regular]).max() <= 1e-9 * size
+    assert np.abs(F(V[singular])).max(initial=0.0) <= 1e-9 * scale * size
+    counts = mc.edge_counts(T)
+    edges = np.array(list(counts.keys()), np.int64).reshape(-1, 2)
+    n = np.array(list(counts.values()))
+    # No open edge inside the box.
+    assert mc.boundary_edges_off_box(V, T, box) == []
+    # Edges of more than two triangles lie on the curve, with an even count.
+    many = n > 2
+    assert singular[edges[many]].all()
+    assert (n[many] % 2 == 0).all()
+    # The curve is followed by mesh edges between singular vertices, or by line cells.
+    samples = singular_locus(text, box)
+    inside = np.all((samples > box[:, 0] + 0.02 * size) & (samples < box[:, 1] - 0.02 * size), axis=1)
+    samples = samples[inside]
+    assert len(samples) >= 20, "the oracle found no curve: the case is wrong"
+    on_curve = edges[singular[edges[:, 0]] & singular[edges[:, 1]]]
+    segs = np.concatenate([on_curve, L]) if len(L) else on_curve
+    d = segment_distance(samples, V[segs[:, 0]], V[segs[:, 1]])
+    assert d.max() <= 0.01 * size, f"{(d > 0.01 * size).sum()} curve samples far from the curve's edges"
+    assert mc.components(T) == components
+    if half_sheets is not None:
+        # Each edge along the curve (not at its ends) has one triangle per half-sheet.
+        inner = on_curve[~mc.on_box(V[on_curve[:, 0]], box, 1e-3) & ~mc.on_box(V[on_curve[:, 1]], box, 1e-3)]
+        per_edge = np.array([counts[(min(a, b), max(a, b))] for a, b in inner.tolist()])
+        assert len(per_edge) and np.mean(per_edge == half_sheets) >= 0.95, np.bincount(per_edge)
+    close_to_marching_cubes(F, box, V, T)
+    return m, L
+
+
+def close_to_marching_cubes(F, box, V, T):
+    """Every triangle near a dense marching-cubes sample of F = 0 (grid off the split planes)."""
+    if importlib.util.find_spec("skimage") is None:
+        pytest.skip("scikit-image is not installed (pip install -e '.[bench]'): the marching-cubes oracle is skipped")
+    from skimage.measure import marching_cubes
+
+    n = 128
+    h = (box[:, 1] - box[:, 0]) / n
+    axes = [np.linspace(b[0] + 0.37 * s, b[1] - 0.63 * s, n) for b, s in zip(box, h)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    values = F(grid).reshape(n, n, n)
+    pts, _, _, _ = marching_cubes(values, 0.0, spacing=tuple(h))
+    pts = pts + np.array([a[0] for a in axes])
+    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+    longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1)],
+                     axis=0)
+    d, _ = cKDTree(pts).query((a + b + c) / 3)
+    # Thin wedges between tangent sheets are below the grid's resolution:
+    # allow two grid cells besides the triangle's own size.
+    far = d > 0.5 * longest + 2.0 * float(h.max())
+    assert far.mean() <= 0.002, f"{far.sum()} of {len(T)} triangles away from the surface"
+
+
+# ------------------------------------------------------------------ the classical surfaces
+CLASSICAL = [
+    # text, box, components, half-sheets on the curve (None: varies)
+    ("x^2 - y^2 z", BOX1, 1, None),                                     # Whitney umbrella
+    ("x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", BOX1, 1, None),             # Steiner's Roman surface
+    ("(x^2 + y^2 + z^2 - 1) z", ((-1.5, 1.5),) * 3, 1, 4),              # sphere through a plane
+    ("x^3 - 3 x y^2", BOX1, 1, 6),                                      # three planes through a line
+    ("x^2 - y^3", BOX1, 1, 2),                                          # cuspidal edge
+    ("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", ((-1.5, 1.5),) * 3, 1, None),    # two cylinders: crossing double curves
+    ("y^2 - x^2 (x + 1)", ((-1.5, 1.5),) * 3, 1, 4),                    # nodal cubic times a line
+]
+
+
+@pytest.mark.parametrize("text, box, components, half", CLASSICAL)
+def test_classical_surfaces_with_singular_curves(text, box, components, half):
+    check_curve_mesh(text, box, components, half)
+
+
+@pytest.mark.parametrize("text", ["x^2 - y^2 z", "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", "x^2 - y^3",
+                                  "x^3 - 3 x y^2", "(x^2 + y^2 + z^2 - 1) z"])
+@pytest.mark.parametrize("seed", [3, 11])
+def test_float_rotated_and_shifted(text, seed):
+    # General position: the curve on no split plane or lattice line, and
+    # coefficients rounded to 15 digits (the curve is singular only to
+    # the precision of the input).
+    box = ((-1.5, 1.5),) * 3 if "z^2 - 1" in text else BOX1
+    check_curve_mesh(float_rotated(text, seed), box, 1)
+
+
+def test_transversal_types_are_named():
+    # The plane curve singularity across the curve, from the normal forms.
+    cases = {"x^2 - y^2": ("A1 double curve", 2, 4), "x^2 + y^2": ("A1 isolated line", 0, 0),
+             "x^2 - y^3": ("A2 cuspidal edge", 1, 2), "x^2 - y^4": ("A3 tacnode edge", 2, 4),
+             "x^3 - 3 x y^2": ("D4 triple curve", 3, 6)}
+    for text, (name, sheets, half) in cases.items():
+        m = mesh_quiet(float_rotated(text, 1, 0.1), BOX1)
+        assert m.singular_curves, text
+        main = max(m.singular_curves, key=lambda c: c.length)
+        assert (main.type, main.sheets, main.half_sheets) == (name, sheets, half), text
+        assert main.length > 1.5  # the whole line through the box
+
+
+def test_isolated_real_line_is_line_cells():
+    # x^2 + y^2 = 0 is the z-axis alone: no triangle, a polyline of line cells.
+    m = mesh_quiet("x^2 + y^2", BOX1)
+    assert len(m.faces) == 0
+    pts, lines = m.curve_lines()
+    assert len(lines) > 100
+    assert np.abs(pts[lines.ravel()][:, :2]).max() <= 1e-12
+    assert np.ptp(pts[lines.ravel()][:, 2]) == pytest.approx(2.0)
+
+
+def test_whitney_umbrella_pinch_point_and_handle():
+    m, lines = check_curve_mesh("x^2 - y^2 z", BOX1, 1)
+    pinch = [sp for sp in m.special_points if sp.kind == "pinch point"]
+    assert len(pinch) == 1 and np.linalg.norm(pinch[0].point) <= 1e-9
+    assert pinch[0].vertex is not None
+    # The handle (z < 0) is line cells, the double line (z > 0) is edges of 4 triangles.
+    pts, _ = m.curve_lines()
+    z = pts[lines.ravel()][:, 2]
+    assert z.max() <= 1e-9 and z.min() == pytest.approx(-1.0)
+    types = {c.type for c in m.singular_curves}
+    assert types == {"A1 double curve", "A1 isolated line"}
+
+
+def test_roman_surface_triple_and_pinch_points():
+    # Steiner: the three axes are double segments between the pinch points
+    # at +-1/2 (for x^2y^2 + y^2z^2 + z^2x^2 - xyz), crossing at a triple point.
+    m = mesh_quiet("x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", BOX1)
+    triple = [sp.point for sp in m.special_points if sp.kind == "triple point"]
+    pinch = np.array([sp.point for sp in m.special_points if sp.kind == "pinch point"])
+    assert len(triple) == 1 and np.linalg.norm(triple[0]) <= 1e-9
+    want = np.array([[s * 0.5 * (i == a) for i in range(3)] for a in range(3) for s in (1, -1)])
+    assert len(pinch) == 6
+    assert np.abs(np.sort(pinch, axis=0) - np.sort(want, axis=0)).max() <= 1e-9
+    assert all(sp.vertex is not None for sp in m.special_points)
+
+
+def test_split_plane_and_general_position_agree():
+    # The same umbrella with its double line on a lattice line (box centred)
+    # and off every split plane (box shifted): the same curve types.
+    a = mesh_quiet("x^2 - y^2 z", BOX1)
+    b = mesh_quiet("x^2 - y^2 z", ((-0.9137, 1.0711), (-1.0291, 0.9623), (-0.9871, 1.0333)))
+    assert sorted(c.type for c in a.singular_curves) == sorted(c.type for c in b.singular_curves)
+    assert len(b.special_points) == len(a.special_points)
+
+
+def test_curves_are_written_beside_the_triangles(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    m = mesh_quiet("x^2 - y^2 z", BOX1)
+    m.write(tmp_path / "u.vtu")
+    cells = {c.type: len(c.data) for c in meshio.read(tmp_path / "u.vtu").cells}
+    assert cells["triangle"] == len(m.faces) and cells["line"] > 100
+    m.write(tmp_path / "u.obj")  # no line cells in OBJ: a companion file
+    curves = meshio.read(tmp_path / "u.curves.vtk")
+    assert sum(len(c.data) for c in curves.cells if c.type == "line") == len(m.curve_graph[1])
+    text = m.report_text()
+    assert "A1 double curve" in text and "pinch point" in text
+
+
+def test_same_bytes_every_time(tmp_path):
+    paths = []
+    for k in range(2):
+        m = mesh_quiet("x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", BOX1, coarse=16, fine=64)
+        paths.append(m.write(tmp_path / f"r{k}.vtk"))
+    assert paths[0].read_bytes() == paths[1].read_bytes()
