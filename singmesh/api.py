@@ -24,6 +24,7 @@ from singmesh.skeleton.singular_curves import singular_curves
 from . import tolerances as tol
 from .errors import SurfaceError
 from .mesh import Mesh, SingularPointWarning
+from .squarefree import squarefree
 from .surface import Surface
 
 DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
@@ -87,6 +88,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     """
     t0 = time.perf_counter()
     surf = Surface.parse(surface, **params)
+    # F = G^2 H: G = 0 is no sign change; mesh G H and say so.
+    surf, repeated = squarefree(surf)
     b = check_box(box)
     coarse_level = _level(coarse, "coarse")
     fine_level = _level(fine, "fine")
@@ -172,6 +175,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "curve_time": t_curves,
         "singular_locus_not_isolated": bool(overflow or len(curves.points)),
         "untraced_curve": bool(overflow),
+        "repeated_factors": repeated,
         "overlapping_stars": len(clashes),
         "time": time.perf_counter() - t0,
     }

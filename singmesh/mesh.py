@@ -188,6 +188,9 @@ class Mesh:
         if self.stats.get("untraced_curve"):
             out.append("F has a curve of singular points in the box that could not be traced; "
                        "near it the mesh is not right")
+        for factor, k in self.stats.get("repeated_factors", []):
+            out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
+                       "(a repeated factor does not change sign, so its zeros are all singular)")
         bad = self.stats.get("curve_edges_not_meshed", 0)
         if bad:
             out.append(f"{bad} edge(s) of the singular curves have fewer triangles than the sheets through them")

@@ -261,3 +261,7 @@ CURVE_MERGE = 0.3
 #: Around pinch and triple points the non-simple leaves join the tube up
 #: to this many cells away (the sheets meet tangentially there).
 CURVE_BALL_GROW = 10.0
+
+#: The square-free part is computed (sympy, exact) for polynomials with at
+#: most this many terms; beyond, sympy's factoring takes seconds.
+SQUAREFREE_MAX_TERMS = 400

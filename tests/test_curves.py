@@ -296,3 +296,18 @@ def test_same_bytes_every_time(tmp_path):
         m = mesh_quiet("x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", BOX1, coarse=16, fine=64)
         paths.append(m.write(tmp_path / f"r{k}.vtk"))
     assert paths[0].read_bytes() == paths[1].read_bytes()
+
+
+def test_repeated_factor_is_removed_and_said():
+    # (x^2+y^2+z^2-1)^2 never changes sign: its sphere is all singular.
+    # The square-free part is the sphere; the mesh is a closed sphere and
+    # the note names the factor.
+    m = mesh_quiet("(x^2 + y^2 + z^2 - 1)^2", ((-1.5, 1.5),) * 3, coarse=16, fine=64)
+    assert mc.boundary_edges(m.faces) == [] and mc.euler(m.vertices, m.faces) == 2
+    r = np.linalg.norm(m.vertices, axis=1)
+    assert np.abs(r - 1).max() <= 1e-12
+    assert any("(x**2 + y**2 + z**2 - 1)^2" in n for n in m.notes())
+    # A product with a doubled factor keeps the other factor's sheet too.
+    m = mesh_quiet("(x - 0.3)^3 (y + 0.2)", BOX1, coarse=16, fine=64)
+    assert {round(float(v), 12) for v in m.vertices[:, 0][np.abs(m.vertices[:, 1] + 0.2) > 1e-9]} == {0.3}
+    assert m.stats["repeated_factors"] == [("x - 3/10", 3)]
