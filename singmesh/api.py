@@ -29,6 +29,10 @@ from .surface import Surface
 
 DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
 
+#: Special points of curves where sheets meet tangentially: the tube is
+#: wider around them (``CURVE_BALL_GROW``).
+BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of type")
+
 
 def _level(cells: int, what: str) -> int:
     if not isinstance(cells, (int, np.integer)) or cells < 1 or cells & (cells - 1):
@@ -114,8 +118,11 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
     keep = cubes
     if len(curves.points):
+        balls = np.array([sp.point for sp in curves.special if sp.kind in BALL_KINDS]).reshape(-1, 3)
+        reach = (tol.CURVE_BALL_GROW + 2) * cell
         keep = np.concatenate([cubes, tube_regions(b, fine_level, curves.points, curves.edges,
-                                                   pad=max(tol.CURVE_TUBE_GROW, tol.CURVE_BALL_GROW) + 2)])
+                                                   pad=tol.CURVE_TUBE_GROW + 2),
+                               np.stack([balls - reach, balls + reach], axis=1)])
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
@@ -134,8 +141,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         group, stars, clashes = group_stars(tree, cubes, centres)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
-            balls = [sp.point for sp in curves.special if sp.kind in ("pinch point", "triple point")]
-            group[tube_leaves(tree, links, curves.points, curves.edges, np.array(balls))] = tube_id
+            group[tube_leaves(tree, links, curves.points, curves.edges, balls)] = tube_id
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface

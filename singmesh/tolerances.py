@@ -265,3 +265,7 @@ CURVE_BALL_GROW = 10.0
 #: The square-free part is computed (sympy, exact) for polynomials with at
 #: most this many terms; beyond, sympy's factoring takes seconds.
 SQUAREFREE_MAX_TERMS = 400
+
+#: A pinch point is bracketed on the chord between two curve vertices down
+#: to this fraction of a cell, then on the curve itself.
+CURVE_CHORD_PLACE = 1e-3

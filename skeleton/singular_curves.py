@@ -164,6 +164,8 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
     x = np.array(q, dtype=float)
     k = len(x)
     floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
+    previous = np.full(k, np.inf)
+    stalled = np.zeros(k, np.int64)
     with np.errstate(all="ignore"):
         for _ in range(tol.CURVE_NEWTON):
             f, g, hh = surface.jet(x)
@@ -185,6 +187,12 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
             norm = np.where(np.isfinite(norm), norm, np.inf)
             best = np.argmin(norm, axis=0)
             x = trials[best, np.arange(k)]
+            # At rounding level the residual stops falling: done there.
+            now = norm[best, np.arange(k)]
+            stalled = np.where(now >= 0.9 * previous, stalled + 1, 0)
+            previous = np.minimum(previous, now)
+            if np.all(stalled >= 3):
+                break
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
         ok[ok] = residual(surface, x[ok]) <= _limit(surface)
     return x, ok
@@ -776,9 +784,12 @@ def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, na
         lo, hi = 0.0, 1.0
         sign_lo = np.sign(_normal_det(surface, a, t))
         x = a
+        # Points on the chord first (no Newton: a Hessian each), then on
+        # the curve once the bracket is narrow.
         while (hi - lo) * length > tol.CURVE_PLACE * step:
             mid = (lo + hi) / 2
-            x = point(mid)
+            narrow = (hi - lo) * length <= tol.CURVE_CHORD_PLACE * step
+            x = point(mid) if narrow else a + mid * (b - a)
             f = np.sign(_normal_det(surface, x, t))
             if f == 0:
                 break
@@ -786,7 +797,7 @@ def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, na
                 lo = mid
             else:
                 hi = mid
-        return x
+        return point((lo + hi) / 2)
     # Otherwise the type itself is bisected, to where it is read reliably.
     lo, hi = 0.0, 1.0
     x = a
