@@ -44,7 +44,7 @@ def tube_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edge
     every region).
     """
     cell = (tree_box[:, 1] - tree_box[:, 0]) / (1 << fine_level)
-    s = curve_samples(points, edges, 0.5 * float(cell.min()) * block)
+    s = curve_samples(points, edges, 0.5 * float(cell.min()) * block) if len(edges) else np.zeros((0, 3))
     lattice = np.floor((s - tree_box[:, 0]) / (cell * block)).astype(np.int64)
     blocks = np.unique(lattice, axis=0)
     lo = tree_box[:, 0] + blocks * cell * block - pad * cell
@@ -53,12 +53,15 @@ def tube_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edge
 
 
 def tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
-                balls: np.ndarray | None = None) -> np.ndarray:
+                balls: np.ndarray | None = None, wide: np.ndarray | None = None) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets
     meet tangentially and stay close further out) the non-simple leaves
-    join up to ``CURVE_BALL_GROW`` cells away.
+    join up to ``CURVE_BALL_GROW`` cells away.  Along the edges flagged
+    ``wide`` (tangent sheets: a tacnode edge, whose sheets part only as
+    the square of the distance) the tube's radius is
+    ``CURVE_TANGENT_RADIUS``, so that the sheets are apart where they leave it.
 
     Returns
     -------
@@ -68,12 +71,19 @@ def tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     inside = np.zeros(n, bool)
     if len(points) == 0 or n == 0:
         return inside
-    s = (curve_samples(points, edges, 0.25 * float(tree.cell.min())) - tree.box[:, 0]) / tree.cell
     centre = tree.corner + tree.size[:, None] / 2.0
     half = tree.size / 2.0
-    dist, _ = cKDTree(s).query(centre, p=np.inf, distance_upper_bound=float(half.max()) + tol.CURVE_TUBE_GROW + 1)
-    inside = dist <= half + tol.CURVE_TUBE_RADIUS
-    reach = dist <= half + tol.CURVE_TUBE_GROW
+    wide = np.zeros(len(edges), bool) if wide is None else np.asarray(wide, bool)
+    reach = np.zeros(n, bool)
+    for flag, radius in ((False, tol.CURVE_TUBE_RADIUS), (True, tol.CURVE_TANGENT_RADIUS)):
+        sel = wide == flag
+        if not sel.any():
+            continue
+        s = (curve_samples(points, edges[sel], 0.25 * float(tree.cell.min())) - tree.box[:, 0]) / tree.cell
+        grow_to = radius - tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW
+        dist, _ = cKDTree(s).query(centre, p=np.inf, distance_upper_bound=float(half.max()) + grow_to + 1)
+        inside |= dist <= half + radius
+        reach |= dist <= half + grow_to
     if balls is not None and len(balls):
         b = (np.asarray(balls, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
         d_ball, _ = cKDTree(b).query(centre, p=np.inf)

@@ -120,8 +120,11 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     if len(curves.points):
         balls = np.array([sp.point for sp in curves.special if sp.kind in BALL_KINDS]).reshape(-1, 3)
         reach = (tol.CURVE_BALL_GROW + 2) * cell
-        keep = np.concatenate([cubes, tube_regions(b, fine_level, curves.points, curves.edges,
+        wide = _tangent_edges(curves)
+        keep = np.concatenate([cubes, tube_regions(b, fine_level, curves.points, curves.edges[~wide],
                                                    pad=tol.CURVE_TUBE_GROW + 2),
+                               tube_regions(b, fine_level, curves.points, curves.edges[wide],
+                                            pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
                                np.stack([balls - reach, balls + reach], axis=1)])
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
     events = compute_events(surf, tree)
@@ -141,7 +144,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         group, stars, clashes = group_stars(tree, cubes, centres)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
-            group[tube_leaves(tree, links, curves.points, curves.edges, balls)] = tube_id
+            group[tube_leaves(tree, links, curves.points, curves.edges, balls, wide)] = tube_id
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface
@@ -215,6 +218,15 @@ def _square_bounds(tree, square):
     hi[(n + 1) % 3] += size
     hi[(n + 2) % 3] += size
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
+
+
+def _tangent_edges(curves) -> np.ndarray:
+    """Which curve edges lie on a piece whose sheets are tangent (rank-1 type, two sheets or more)."""
+    wide_vertices = np.zeros(len(curves.points), bool)
+    for c in curves.pieces:
+        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
+            wide_vertices[c.vertices] = True
+    return wide_vertices[curves.edges].all(axis=1) if len(curves.edges) else np.zeros(0, bool)
 
 
 def _curve_points(curves, spacing: float) -> np.ndarray:

@@ -269,3 +269,8 @@ SQUAREFREE_MAX_TERMS = 400
 #: A pinch point is bracketed on the chord between two curve vertices down
 #: to this fraction of a cell, then on the curve itself.
 CURVE_CHORD_PLACE = 1e-3
+
+#: Radius (cells) of the tube along a curve whose sheets are tangent (a
+#: tacnode edge): they part as the square of the distance, and must be
+#: more than a cell apart where they leave the tube.
+CURVE_TANGENT_RADIUS = 10.0

@@ -234,15 +234,17 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     axis = int(np.argmin(s))
     q = x + min(float(s[axis]), 1.0) * d
     value = box[axis, 0] if d[axis] < 0 else box[axis, 1]
-    e = np.zeros(3)
-    e[axis] = 1.0
-    q[axis] = value
-    z, ok = _correct(surface, q[None], e[None], h)
-    z = z[0]
+    # Newton held in the face's plane stalls on a tangent-sheet curve that
+    # meets the face obliquely: Newton across the curve, then along it
+    # onto the face (the curve is straight to rounding over that slide).
+    t = _unit(d)
+    z = q
+    for _ in range(3):
+        z = _correct(surface, z[None], t[None], h)[0][0]
+        if abs(t[axis]) > 1e-3:
+            z = z + t * (value - z[axis]) / t[axis]
     z[axis] = value
-    if not ok[0] or not _inside(box, z + 0 * e):
-        z = np.clip(z, box[:, 0], box[:, 1])
-    return z
+    return np.clip(z, box[:, 0], box[:, 1])
 
 
 def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,

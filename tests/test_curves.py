@@ -311,3 +311,11 @@ def test_repeated_factor_is_removed_and_said():
     m = mesh_quiet("(x - 0.3)^3 (y + 0.2)", BOX1, coarse=16, fine=64)
     assert {round(float(v), 12) for v in m.vertices[:, 0][np.abs(m.vertices[:, 1] + 0.2) > 1e-9]} == {0.3}
     assert m.stats["repeated_factors"] == [("x - 3/10", 3)]
+
+
+@pytest.mark.parametrize("seed", [7, 3])
+def test_tacnode_edge_in_general_position(seed):
+    # Two sheets tangent along a line (x^2 = y^4): they part only as the
+    # square of the distance, yet every edge of the curve must carry two
+    # triangles of each sheet, and no triangle join them.
+    check_curve_mesh(float_rotated("x^2 - y^4", seed), BOX1, 1, half_sheets=4)
