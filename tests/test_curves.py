@@ -34,21 +34,14 @@ from scipy.spatial import cKDTree
 import meshcheck as mc
 import singmesh
 from singmesh.surface import Surface, X, Y, Z
+from test_rounded import float_rotated as rounded_float_rotated
 
 BOX1 = ((-1.0, 1.0),) * 3
 
 
-def float_rotated(text: str, seed: int, shift_size: float = 0.2) -> str:
-    """``text`` composed with a random orthogonal matrix (numpy qr) and shift, 15 significant digits."""
-    rng = np.random.default_rng(seed)
-    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-    shift = rng.uniform(-shift_size, shift_size, 3)
-    e = Surface.parse(text).expr
-    u = [sum(sympy.Float(q[i, j], 17) * ((X, Y, Z)[j] - sympy.Float(shift[j], 17)) for j in range(3))
-         for i in range(3)]
-    poly = sympy.Poly(sympy.expand(e.subs({X: u[0], Y: u[1], Z: u[2]}, simultaneous=True)), X, Y, Z)
-    return " ".join(f"{float(c):+.15g}" + "".join(f" {v}^{n}" for v, n in (("x", i), ("y", j), ("z", k)) if n)
-                    for (i, j, k), c in poly.terms())
+def float_rotated(text: str, seed: int) -> str:
+    """``text`` under a random float rotation and shift, 15 digits (as in test_rounded)."""
+    return rounded_float_rotated(text, seed)[0]
 
 
 def lambdas(text: str):
@@ -225,7 +218,7 @@ def test_transversal_types_are_named():
              "x^2 - y^3": ("A2 cuspidal edge", 1, 2), "x^2 - y^4": ("A3 tacnode edge", 2, 4),
              "x^3 - 3 x y^2": ("D4 triple curve", 3, 6)}
     for text, (name, sheets, half) in cases.items():
-        m = mesh_quiet(float_rotated(text, 1, 0.1), BOX1)
+        m = mesh_quiet(float_rotated(text, 1), BOX1)
         assert m.singular_curves, text
         main = max(m.singular_curves, key=lambda c: c.length)
         assert (main.type, main.sheets, main.half_sheets) == (name, sheets, half), text
