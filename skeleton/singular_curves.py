@@ -514,22 +514,23 @@ def _graph(polylines: list, surface: Surface, h: float):
 
 # ---------------------------------------------------------------- types
 def _tangents(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """Unit tangent at each graph vertex (from its neighbours; any at a crossing)."""
+    """Unit tangent at each graph vertex: the sum of its edges' directions, signed alike.
+
+    Edges are stored in any orientation; at each vertex every incident
+    edge is counted in the orientation agreeing with the vertex's first
+    edge (at a path vertex: the chord from one neighbour to the other).
+    """
     t = np.zeros_like(points)
+    if len(edges) == 0:
+        return np.tile([1.0, 0, 0], (len(points), 1))
     d = points[edges[:, 1]] - points[edges[:, 0]]
-    # Orient every edge the same way as the first of its vertex's edges
-    # (a path's edges in order do): sum with signs against the first.
+    vertex = edges.T.ravel()                     # each incidence: its vertex ...
+    edge = np.tile(np.arange(len(edges)), 2)     # ... and its edge
+    _, first = np.unique(vertex, return_index=True)
     ref = np.zeros_like(points)
-    first = np.full(len(points), -1)
-    for k, (a, b) in enumerate(edges.tolist()):
-        for v, s in ((a, 1.0), (b, 1.0)):
-            if first[v] < 0:
-                first[v] = k
-                ref[v] = s * d[k]
-    for k, (a, b) in enumerate(edges.tolist()):
-        for v in (a, b):
-            sgn = 1.0 if np.dot(d[k], ref[v]) >= 0 else -1.0
-            t[v] += sgn * d[k]
+    ref[vertex[first]] = d[edge[first]]
+    sign = np.where(np.einsum("ki,ki->k", d[edge], ref[vertex]) >= 0, 1.0, -1.0)
+    np.add.at(t, vertex, sign[:, None] * d[edge])
     norm = np.linalg.norm(t, axis=1, keepdims=True)
     return np.where(norm > 0, t / np.maximum(norm, 1e-300), np.array([1.0, 0, 0]))
 
