@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import singmesh  # noqa: E402
 from common import best_time, format_table, marching_cubes  # noqa: E402

@@ -193,6 +193,9 @@ CLASSICAL = [
     ("x^2 - y^3", BOX1, 1, 2),                                          # cuspidal edge
     ("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", ((-1.5, 1.5),) * 3, 1, None),    # two cylinders: crossing double curves
     ("y^2 - x^2 (x + 1)", ((-1.5, 1.5),) * 3, 1, 4),                    # nodal cubic times a line
+    ("(x^2 + y^2) z - 2 x y", ((-1.3, 1.3),) * 3, 1, None),              # Pluecker's conoid: pinch points at z = +-1
+    ("x y z", BOX1, 1, None),                                           # three planes: three double lines, a triple point
+    ("x^2 - y^2 z^2", BOX1, 1, None),                                   # two double lines crossing
 ]
 
 
@@ -312,3 +315,16 @@ def test_tacnode_edge_in_general_position(seed):
     # square of the distance, yet every edge of the curve must carry two
     # triangles of each sheet, and no triangle join them.
     check_curve_mesh(float_rotated("x^2 - y^4", seed), BOX1, 1, half_sheets=4)
+
+
+def test_pluecker_conoid_pinch_points():
+    # z (x^2 + y^2) = 2 x y: on the z-axis the sheets are the lines
+    # y = t x with z = 2t / (1 + t^2), real for |z| <= 1: a double line
+    # between the pinch points (0, 0, +-1), an isolated line beyond.
+    m = mesh_quiet("(x^2 + y^2) z - 2 x y", ((-1.3, 1.3),) * 3)
+    pinch = np.array(sorted((sp.point.tolist() for sp in m.special_points if sp.kind == "pinch point"),
+                            key=lambda p: p[2]))
+    assert pinch.shape == (2, 3)
+    assert np.abs(pinch - [[0, 0, -1], [0, 0, 1]]).max() <= 1e-9
+    inner = [c for c in m.singular_curves if np.abs(c.points[:, 2]).max() <= 1 + 1e-9]
+    assert inner and all(c.type == "A1 double curve" for c in inner)
