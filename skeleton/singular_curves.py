@@ -359,7 +359,9 @@ def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
             continue
         start = ends[comp].mean(axis=0)
         z, ok = _correct(surface, start[None], None, tol.CURVE_JOIN * h)
-        meet = z[0] if ok[0] else start
+        # Where Newton finds no singular point between the ends, the
+        # first end (on the curve) is the meeting point.
+        meet = z[0] if ok[0] else ends[comp[0]]
         for c in comp:
             k, e = lost[c]
             p, closed = lines[k]
