@@ -274,3 +274,7 @@ CURVE_CHORD_PLACE = 1e-3
 #: tacnode edge): they part as the square of the distance, and must be
 #: more than a cell apart where they leave the tube.
 CURVE_TANGENT_RADIUS = 10.0
+
+#: Candidate boxes of the curve search (at its level) in a clump spanning
+#: fewer boxes than this hold isolated points, not a curve.
+CURVE_MIN_CLUMP = 4

@@ -36,7 +36,7 @@ from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 from .centre import residual
-from .singular import candidate_boxes
+from .singular import _clumps, candidate_boxes
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,6 +136,13 @@ class CurveSet:
 def curve_samples(surface: Surface, box: np.ndarray, level: int) -> np.ndarray:
     """Points of the singular locus near the candidate boxes at ``level``, one per box."""
     lo, hi = candidate_boxes(surface, box, level)
+    if len(lo) == 0:
+        return np.zeros((0, 3))
+    # A curve makes a long clump of candidate boxes; isolated points make
+    # small ones (a few boxes across): no Newton there.
+    label, span = _clumps(np.rint((lo - box[:, 0]) / (hi - lo)).astype(np.int64))
+    long = span[label] >= tol.CURVE_MIN_CLUMP
+    lo, hi = lo[long], hi[long]
     if len(lo) == 0:
         return np.zeros((0, 3))
     h = float(np.max(hi[0] - lo[0]))
