@@ -24,6 +24,56 @@ from singmesh import tolerances as tol
 from singmesh.boxes.octree import Octree
 
 
+#: Special points of curves where sheets meet tangentially: the tube is
+#: wider around them (``CURVE_BALL_GROW``).
+BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of type")
+
+
+def balls(curves) -> np.ndarray:
+    """The special points of a :class:`~singmesh.skeleton.singular_curves.CurveSet` the tube widens around."""
+    return np.array([sp.point for sp in curves.special if sp.kind in BALL_KINDS]).reshape(-1, 3)
+
+
+def tangent_edges(curves) -> np.ndarray:
+    """Which curve edges lie on a piece whose sheets are tangent (rank-1 type, two sheets or more)."""
+    wide_vertices = np.zeros(len(curves.points), bool)
+    for c in curves.pieces:
+        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
+            wide_vertices[c.vertices] = True
+    return wide_vertices[curves.edges].all(axis=1) if len(curves.edges) else np.zeros(0, bool)
+
+
+def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
+    """Boxes (k, 2, 3) the subdivision takes to the fine level: the tube and its margin.
+
+    Along the curves ``CURVE_TUBE_GROW`` cells to spare (more where the
+    sheets are tangent), and ``CURVE_BALL_GROW`` around pinch and triple points.
+    """
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    wide = tangent_edges(curves)
+    b = balls(curves)
+    reach = (tol.CURVE_BALL_GROW + 2) * cell
+    return np.concatenate([
+        _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
+        _block_regions(box, fine_level, curves.points, curves.edges[wide],
+                       pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
+        np.stack([b - reach, b + reach], axis=1)])
+
+
+def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
+    """Which leaves form the tube around the curves of a CurveSet: (N,) bool."""
+    return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves))
+
+
+def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
+    """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``."""
+    ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)
+                     if sp.kind == "end on the box"], np.int64)
+    return strip_triangles(rails(grouped, links, tube_id), events.point, events.key, curves.points,
+                           curves.edges, key0 + np.arange(len(curves.points)), ends,
+                           reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box)
+
+
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
     """Points along the curve graph's edges at most ``spacing`` apart."""
     if len(edges) == 0:
@@ -35,8 +85,8 @@ def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.n
     return np.vstack([a[owner] + t[:, None] * (b - a)[owner], points])
 
 
-def tube_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
-                 pad: float, block: int = 8) -> np.ndarray:
+def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
+                   pad: float, block: int = 8) -> np.ndarray:
     """Boxes (k, 2, 3) covering the curve with ``pad`` fine cells to spare.
 
     The blocks of ``block`` fine cells the curve passes through, widened:
@@ -52,8 +102,8 @@ def tube_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edge
     return np.stack([lo, hi], axis=1)
 
 
-def tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
-                balls: np.ndarray | None = None, wide: np.ndarray | None = None) -> np.ndarray:
+def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
+                 balls: np.ndarray | None = None, wide: np.ndarray | None = None) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets

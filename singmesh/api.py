@@ -15,7 +15,7 @@ from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
-from singmesh.facets.tubes import rails, strip_triangles, tube_leaves, tube_regions
+from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
 from singmesh.skeleton.curves import skeleton_links
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -28,10 +28,6 @@ from .squarefree import squarefree
 from .surface import Surface
 
 DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
-
-#: Special points of curves where sheets meet tangentially: the tube is
-#: wider around them (``CURVE_BALL_GROW``).
-BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of type")
 
 
 def _level(cells: int, what: str) -> int:
@@ -116,16 +112,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     # First pass: the boxes at each singular point, and along each curve
     # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
-    keep = cubes
-    if len(curves.points):
-        balls = np.array([sp.point for sp in curves.special if sp.kind in BALL_KINDS]).reshape(-1, 3)
-        reach = (tol.CURVE_BALL_GROW + 2) * cell
-        wide = _tangent_edges(curves)
-        keep = np.concatenate([cubes, tube_regions(b, fine_level, curves.points, curves.edges[~wide],
-                                                   pad=tol.CURVE_TUBE_GROW + 2),
-                               tube_regions(b, fine_level, curves.points, curves.edges[wide],
-                                            pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
-                               np.stack([balls - reach, balls + reach], axis=1)])
+    keep = np.concatenate([cubes, tube_regions(b, fine_level, curves)]) if len(curves.points) else cubes
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
     events = compute_events(surf, tree)
     links = face_links(tree, events)
@@ -144,7 +131,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         group, stars, clashes = group_stars(tree, cubes, centres)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
-            group[tube_leaves(tree, links, curves.points, curves.edges, balls, wide)] = tube_id
+            group[tube_leaves(tree, links, curves)] = tube_id
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface
@@ -220,19 +207,8 @@ def _square_bounds(tree, square):
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
-def _tangent_edges(curves) -> np.ndarray:
-    """Which curve edges lie on a piece whose sheets are tangent (rank-1 type, two sheets or more)."""
-    wide_vertices = np.zeros(len(curves.points), bool)
-    for c in curves.pieces:
-        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
-            wide_vertices[c.vertices] = True
-    return wide_vertices[curves.edges].all(axis=1) if len(curves.edges) else np.zeros(0, bool)
-
-
 def _curve_points(curves, spacing: float) -> np.ndarray:
     """Points along all singular curves, ``spacing`` apart."""
-    from singmesh.facets.tubes import curve_samples
-
     return curve_samples(curves.points, curves.edges, spacing)
 
 
@@ -241,13 +217,9 @@ def _curve_key0(events) -> int:
     return (int(events.key.max()) + 1 if len(events.key) else 0) + (1 << 40)
 
 
-def _add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id, key0, cell, tree_box):
+def _add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id, key0, cell, box):
     """The polygons with the tube's strips (triangles from rails to the curve) appended."""
-    box_ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)
-                         if sp.kind == "end on the box"], np.int64)
-    tri_keys, tri_pts = strip_triangles(rails(grouped, links, tube_id), events.point, events.key, curves.points,
-                                        curves.edges, key0 + np.arange(len(curves.points)), box_ends,
-                                        reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=tree_box)
+    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box)
     n = len(tri_keys)
     offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
     keys = np.concatenate([keys, tri_keys.ravel()])
