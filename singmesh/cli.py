@@ -17,6 +17,7 @@ from pathlib import Path
 
 from .defs import find_definition, read_definitions
 from .errors import SurfaceError
+from .mesh import FORMATS, LINE_FORMATS
 
 
 def _params(items: list[str]) -> dict[str, str]:
@@ -73,6 +74,8 @@ def _mesh_command(argv: list[str]) -> int:
             print(f"singmesh: error: cannot write {args.output}: {exc}", file=sys.stderr)
             return 2
         print(f"written              {path}")
+        if m.singular_curves and FORMATS.get(path.suffix.lower()) not in LINE_FORMATS:
+            print(f"curves written       {path.with_suffix('.curves.vtk')} (the format has no line cells)")
     return 0
 
 

@@ -328,3 +328,20 @@ def test_pluecker_conoid_pinch_points():
     assert np.abs(pinch - [[0, 0, -1], [0, 0, 1]]).max() <= 1e-9
     inner = [c for c in m.singular_curves if np.abs(c.points[:, 2]).max() <= 1 + 1e-9]
     assert inner and all(c.type == "A1 double curve" for c in inner)
+
+
+def test_cli_lists_curves_and_names_the_companion_file(tmp_path):
+    from singmesh.cli import main
+
+    out = tmp_path / "u.obj"
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["mesh", "x^2 - y^2 z", "-o", str(out), "--box", "-1", "1", "-1", "1", "-1", "1",
+                     "--coarse", "16", "--fine", "64"]) == 0
+    text = buf.getvalue()
+    assert "singular curves      2" in text and "pinch point" in text
+    assert (tmp_path / "u.curves.vtk").is_file() and "u.curves.vtk" in text
