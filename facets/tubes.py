@@ -275,17 +275,23 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
             if dist > reach or (box is not None and not _on_boundary(r[end], box)):
                 continue
             e = int(box_ends[which])
-            if e == s:
-                continue
             w = walk(s, e)
             re_ = ("e", int(events[end]))
+            # Rail end and curve end on two faces of the box (the curve
+            # leaves near a box edge): the strip's cap edge turns at the
+            # surface's crossing of that box edge.
+            corner = None if box is None else _corner_event(r[end], curve_points[e], event_points, box, reach)
             if end == 0:   # ... s_0 -> ... -> e_0 -> r_0 -> r_1 ...
                 for l in range(len(w) - 1):
                     tris.append((re_, ("c", w[l]), ("c", w[l + 1])))
+                if corner is not None:
+                    tris.append((re_, ("c", e), ("e", corner)))
             else:          # ... r_m -> e_m -> ... -> s_m ...
                 w = w[::-1]
                 for l in range(len(w) - 1):
                     tris.append((re_, ("c", w[l]), ("c", w[l + 1])))
+                if corner is not None:
+                    tris.append((re_, ("e", corner), ("c", e)))
     if not tris:
         return np.zeros((0, 3), np.int64), np.zeros((0, 3, 3))
     kind = np.array([[v[0] == "e" for v in t] for t in tris])
@@ -301,3 +307,26 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
 def _on_boundary(p: np.ndarray, box: np.ndarray) -> bool:
     size = float(np.max(box[:, 1] - box[:, 0]))
     return bool(np.any((np.abs(p - box[:, 0]) <= 1e-9 * size) | (np.abs(p - box[:, 1]) <= 1e-9 * size)))
+
+
+def _faces_of(p: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(6,) bool: which faces of the box (x-, x+, y-, y+, z-, z+) the point lies on."""
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    return np.stack([np.abs(p - box[:, 0]) <= 1e-9 * size, np.abs(p - box[:, 1]) <= 1e-9 * size], axis=-1).reshape(
+        p.shape[:-1] + (6,))
+
+
+def _corner_event(r: np.ndarray, e: np.ndarray, event_points: np.ndarray, box: np.ndarray, reach: float):
+    """The event on the box edge between the faces of r and of e, if they share no face; else None."""
+    fr, fe = _faces_of(r, box), _faces_of(e, box)
+    if (fr & fe).any() or not fr.any() or not fe.any():
+        return None
+    near = np.nonzero(np.linalg.norm(event_points - (r + e) / 2, axis=1) <= reach)[0]
+    if len(near) == 0:
+        return None
+    flags = _faces_of(event_points[near], box)
+    on_edge = (flags & fr).any(axis=1) & (flags & fe).any(axis=1)
+    if not on_edge.any():
+        return None
+    cand = near[on_edge]
+    return int(cand[np.argmin(np.linalg.norm(event_points[cand] - (r + e) / 2, axis=1))])

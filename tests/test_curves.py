@@ -345,3 +345,10 @@ def test_cli_lists_curves_and_names_the_companion_file(tmp_path):
     text = buf.getvalue()
     assert "singular curves      2" in text and "pinch point" in text
     assert (tmp_path / "u.curves.vtk").is_file() and "u.curves.vtk" in text
+
+
+def test_curve_leaving_near_a_box_edge_is_closed():
+    # Rotated xyz: a double line leaves the box near the edge x = 1, z = -1,
+    # its rail on one face and its end on the other; the strip's cap turns
+    # at the box edge (no open edge inside the box).
+    check_curve_mesh(float_rotated("x y z", 22), BOX1, 1)
