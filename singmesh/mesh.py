@@ -191,9 +191,10 @@ class Mesh:
         for factor, k in self.stats.get("repeated_factors", []):
             out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
                        "(a repeated factor does not change sign, so its zeros are all singular)")
-        bad = self.stats.get("curve_edges_not_meshed", 0)
+        bad = self.curve_edges_short_of_sheets()
         if bad:
-            out.append(f"{bad} edge(s) of the singular curves have fewer triangles than the sheets through them")
+            out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "
+                       "type has half-sheets (the mesh is not right there)")
         if len(self.faces) == 0:
             if self.singularities:
                 out.append("no triangle: in this box the real surface is only isolated point(s)")
@@ -225,6 +226,21 @@ class Mesh:
             have = np.isin(np.sort(lines, axis=1) @ np.array([n, 1]), np.sort(tri_edges, axis=1) @ np.array([n, 1]))
             lines = lines[~have]
         return np.vstack([self.vertices, pts[extra]]), lines
+
+    def curve_edges_short_of_sheets(self) -> int:
+        """Edges of the singular curves with another number of triangles than their type has half-sheets."""
+        if not self.singular_curves or not len(self.faces):
+            return 0
+        edges, counts = topology.edges_with_counts(self.faces)
+        n = len(self.vertices) + len(self.curve_graph[0])
+        count = dict(zip((np.sort(edges, axis=1) @ np.array([n, 1])).tolist(), counts.tolist()))
+        bad = 0
+        for c in self.singular_curves:
+            v = np.asarray(c.vertices)
+            pairs = np.stack([v, np.roll(v, -1)], axis=1) if c.closed else np.stack([v[:-1], v[1:]], axis=1)
+            keys = (np.sort(pairs, axis=1) @ np.array([n, 1])).tolist()
+            bad += sum(count.get(k, 0) != c.half_sheets for k in keys)
+        return bad
 
     def write_curves(self, path) -> Path:
         """Write the singular curves alone (every curve edge as a line cell) through meshio."""

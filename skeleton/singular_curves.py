@@ -714,14 +714,12 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
     # A vertex next to a special point placed between two vertices is
     # merged into it (no edge of a fraction of a step).
     remap = np.arange(len(P))
-    sp_list = list(special)
     for a, b in E.tolist():
         for u, w in ((a, b), (b, a)):
             if u in special and w not in special and np.linalg.norm(P[u] - P[w]) < tol.CURVE_MERGE * step:
                 remap[w] = u
     E = remap[E]
     E = np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0)
-    del sp_list
     # Only the vertices still on an edge (or special) remain.
     used = np.zeros(len(P), bool)
     used[E.ravel()] = True

@@ -249,6 +249,8 @@ def test_whitney_umbrella_pinch_point_and_handle():
     assert z.max() <= 1e-9 and z.min() == pytest.approx(-1.0)
     types = {c.type for c in m.singular_curves}
     assert types == {"A1 double curve", "A1 isolated line"}
+    # The mesher's own count of curve edges short of their sheets agrees.
+    assert m.curve_edges_short_of_sheets() == 0 and not any("half-sheets" in n for n in m.notes())
 
 
 def test_roman_surface_triple_and_pinch_points():
