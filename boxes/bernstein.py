@@ -89,10 +89,15 @@ def split(tensors: np.ndarray) -> np.ndarray:
         ``out[m, cx, cy, cz]`` is the child with lower corner at
         ``parent_corner + (cx, cy, cz) * half_size``.
     """
-    h = [np.stack(split_matrices(tensors.shape[1 + a] - 1)) for a in range(3)]
-    out = np.einsum("pai,Nijk->Npajk", h[0], tensors, optimize=True)
-    out = np.einsum("qbj,Npajk->Npqabk", h[1], out, optimize=True)
-    return np.einsum("rck,Npqabk->Npqrabc", h[2], out, optimize=True)
+    n = tensors.shape[0]
+    n0, n1, n2 = tensors.shape[1:]
+    h = [np.stack(split_matrices(d - 1)).reshape(2 * d, d) for d in (n0, n1, n2)]
+    # One axis at a time as matrix products (BLAS; einsum's batched path
+    # copies and is slower), then the halves moved in front of the tensors.
+    out = np.matmul(h[0], tensors.reshape(n, n0, n1 * n2))  # (N, p a, j k)
+    out = np.matmul(h[1], out.reshape(n * 2 * n0, n1, n2))  # (N p a, q b, k)
+    out = (out.reshape(-1, n2) @ h[2].T).reshape(n, 2, n0, 2, n1, 2, n2)  # (N, p, a, q, b, r, c)
+    return np.ascontiguousarray(out.transpose(0, 1, 3, 5, 2, 4, 6))
 
 
 def derivative(tensors: np.ndarray, axis: int) -> np.ndarray:

@@ -70,7 +70,8 @@ def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     # Contract one variable at a time (a matrix product, then two
     # row-wise sums): einsum with '...' does not optimise the four-way product.
     t = _powers(p[:, 0], nx) @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
-    t = np.einsum("kjl,kj->kl", t.reshape(-1, ny, nz), _powers(p[:, 1], ny))
+    # Batched matrix products (BLAS), not einsum's slow generic loop.
+    t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
     return np.einsum("kl,kl->k", t, _powers(p[:, 2], nz)).reshape(shape)
 
 
@@ -221,10 +222,12 @@ class Surface:
         shape = p.shape[:-1]
         p = p.reshape(-1, 3)
         c = self.jet_coeffs
-        _, nx, ny, nz = c.shape
-        t = np.einsum("ki,cijl->kcjl", _powers(p[:, 0], nx), c)
-        t = np.einsum("kcjl,kj->kcl", t, _powers(p[:, 1], ny))
-        v = np.einsum("kcl,kl->kc", t, _powers(p[:, 2], nz))
+        m, nx, ny, nz = c.shape
+        # One variable at a time, as matrix products (BLAS): x against the
+        # (x; y, component, z) table, then y and z row by row.
+        t = _powers(p[:, 0], nx) @ c.transpose(1, 2, 0, 3).reshape(nx, -1)  # (K, ny*m*nz)
+        t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, m * nz))  # (K, 1, m*nz)
+        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:, :, 0]  # (K, m)
         f = v[:, 0].reshape(shape)
         g = v[:, 1:4].reshape(shape + (3,))
         h = v[:, [4, 5, 6, 5, 7, 8, 6, 8, 9]].reshape(shape + (3, 3))

@@ -136,6 +136,11 @@ CANDIDATE_DUST = 64 * 2.0 ** -52
 #: points are only fixed to about eps**(1/k) in double precision).
 SINGULAR_LOOSE = 1e-6
 
+#: A Gauss-Newton start whose step is below this times each of its
+#: coordinates (a few ulps) has converged: further steps only change the
+#: last bits, so it stops and the slow starts go on alone.
+NEWTON_STILL = 4 * 2.0 ** -52
+
 #: A singular point is accepted with a relative residual below this (or
 #: below what the input's rounding allows, whichever is larger).
 SINGULAR_RESIDUAL = 1e-12

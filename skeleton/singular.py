@@ -90,20 +90,35 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
     """Least-squares Newton on (F, grad F) = 0 from many starts at once.
 
     With ``max_step``, steps longer than that are shortened to it; with
-    ``across`` (a unit vector), steps have no component along it.
+    ``across`` (a unit vector, or one per start), steps have no component
+    along it.  A start stops once its step is at rounding level (it would
+    only jitter in the last bits): hundreds of nodes converge in a few
+    steps, and only the slow ones (degenerate points) go on.
     """
     x = np.array(x, dtype=float)
+    if across is not None:
+        across = np.broadcast_to(np.asarray(across, dtype=float), x.shape)
+    live = np.arange(len(x))
     for _ in range(iterations):
-        f, g, h = surface.jet(x)
+        if len(live) == 0:
+            break
+        y = x[live]
+        f, g, h = surface.jet(y)
         r = np.concatenate([f[:, None], g], axis=1)  # (K, 4)
         j = np.concatenate([g[:, None, :], h], axis=1)  # (K, 4, 3)
         step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
         if across is not None:
-            step = step - np.outer(step @ across, across)
+            a = across[live]
+            step = step - np.einsum("ki,ki->k", step, a)[:, None] * a
         if max_step is not None:
             length = np.linalg.norm(step, axis=1, keepdims=True)
             step = step * np.minimum(1.0, max_step / np.maximum(length, 1e-300))
-        x = x - step
+        x[live] = y - step
+        # Converged: each coordinate's step is below a few of its ulps.  A
+        # coordinate going to 0 (a point on a symmetry plane) goes on until
+        # it is 0; NaN steps stay live and stay NaN, as before.
+        moving = ~np.all(np.abs(step) <= tol.NEWTON_STILL * np.abs(y), axis=1)
+        live = live[moving]
     return x
 
 
@@ -280,22 +295,31 @@ def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndar
     # Newton across a curve of cusps or tacnodes converges slowly; a point
     # residual of CURVE_RESIDUAL is on it for this purpose.
     limit = max(accept_residual(surface), tol.CURVE_RESIDUAL)
-    for lab in np.nonzero(extent >= tol.CURVE_SPAN)[0].tolist():
+    long = np.nonzero(extent >= tol.CURVE_SPAN)[0].tolist()
+    starts, dirs, owner = [], [], []
+    for lab in long:
         mine = np.nonzero(label == lab)[0]
         centres = (lo[mine] + hi[mine]) / 2
         axis = _principal(centres)
         t = (centres - centres.mean(axis=0)) @ axis
         picks = np.argsort(t, kind="stable")[np.linspace(0, len(mine) - 1, tol.CURVE_SAMPLES).astype(int)]
-        ends = []
         for k in picks.tolist():
             # Across the clump where it is: the boxes within three of this one.
             local = centres[np.abs(centres - centres[k]).max(axis=1) <= 3.0 * h]
-            x = gauss_newton(surface, centres[k][None], iterations=60, max_step=h, across=_principal(local))[0]
-            if np.abs(x - centres[k]).max() <= 2 * h and residual(surface, x[None])[0] <= limit:
-                ends.append(x)
+            starts.append(centres[k])
+            dirs.append(_principal(local))
+            owner.append(lab)
+    if not long:
+        return curve[label]
+    # All clumps' starts in one Newton run (each across its own direction).
+    starts, owner = np.array(starts), np.array(owner)
+    x = gauss_newton(surface, starts, iterations=60, max_step=h, across=np.array(dirs))
+    good = np.abs(x - starts).max(axis=1) <= 2 * h
+    good[good] = residual(surface, x[good]) <= limit
+    for lab in long:
         # Two singular points CURVE_SPAN / 2 boxes apart, each found next to
         # where it was looked for: an isolated point is one of them at most.
-        ends = np.array(ends).reshape(-1, 3)
+        ends = x[good & (owner == lab)]
         far = np.linalg.norm(ends[:, None] - ends[None], axis=2).max(initial=0.0)
         curve[lab] = far >= 0.5 * tol.CURVE_SPAN * h
     return curve[label]
