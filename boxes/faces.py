@@ -204,6 +204,27 @@ def face_links(tree: Octree, events: Events) -> FaceLinks:
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
 
 
+@dataclass
+class LeafSides:
+    """The leaves on both sides of every contact square, without events.
+
+    The adjacency of the leaves across faces (what :func:`star_cubes
+    <singmesh.facets.stars.star_cubes>` grows stars along): the ``square``,
+    ``minus`` and ``plus`` of :class:`FaceLinks`, at a fraction of its cost.
+    """
+
+    square: np.ndarray
+    minus: np.ndarray
+    plus: np.ndarray
+
+
+def leaf_sides(tree: Octree) -> LeafSides:
+    """Contact squares and the leaves on their -n and +n sides (-1 where none)."""
+    squares, _, _ = contact_squares(tree)
+    minus, plus = _sides(tree, squares)
+    return LeafSides(square=squares, minus=minus, plus=plus)
+
+
 def _sides(tree: Octree, squares):
     """Leaves on the -n and +n sides of each square (-1 where none)."""
     n, plane, u0, v0, size = squares.T

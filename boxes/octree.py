@@ -201,14 +201,29 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     -------
     meets, inside : (N,) bool
     """
+    from scipy.spatial import cKDTree
+
     cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
     size = 1 << (fine_level - level)
-    lo = (box[:, 0] + corner * cell)[:, None, :]
+    lo = box[:, 0] + corner * cell
     hi = lo + size * cell
     pad = rel * size * cell
-    r_lo, r_hi = regions[None, :, 0, :], regions[None, :, 1, :]
-    meets = ((lo - pad <= r_hi) & (hi + pad >= r_lo)).all(axis=2).any(axis=1)
-    inside = ((lo + pad >= r_lo) & (hi - pad <= r_hi)).all(axis=2).any(axis=1)
+    meets = np.zeros(len(corner), bool)
+    inside = np.zeros(len(corner), bool)
+    if len(corner) == 0 or len(regions) == 0:
+        return meets, inside
+    # Only pairs whose centres are within reach (max norm, per axis) can
+    # meet: found by a k-d tree, not a (boxes x regions) table, then the
+    # exact closed-box tests on those pairs alone.
+    reach = (0.5 * size * cell + 0.5 * (regions[:, 1] - regions[:, 0]).max(axis=0) + pad) * (1 + 1e-6)
+    reach = np.maximum(reach, 1e-300)
+    pairs = cKDTree((lo + hi) / 2 / reach).sparse_distance_matrix(
+        cKDTree(regions.mean(axis=1) / reach), 1.0, p=np.inf, output_type="ndarray")
+    owner, reg = pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)
+    b_lo, b_hi = lo[owner], hi[owner]
+    r_lo, r_hi = regions[reg, 0], regions[reg, 1]
+    meets[owner[((b_lo - pad <= r_hi) & (b_hi + pad >= r_lo)).all(axis=1)]] = True
+    inside[owner[((b_lo + pad >= r_lo) & (b_hi - pad <= r_hi)).all(axis=1)]] = True
     return meets, inside
 
 

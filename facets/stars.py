@@ -31,7 +31,7 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     tree : Octree
-    links : FaceLinks (its ``minus``/``plus`` leaves give the adjacency)
+    links : FaceLinks or LeafSides (its ``minus``/``plus`` leaves give the adjacency)
     points : (k, 3) ndarray
 
     Returns

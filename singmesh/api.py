@@ -9,14 +9,14 @@ from dataclasses import replace
 import numpy as np
 
 from singmesh.boxes.edges import compute_events
-from singmesh.boxes.faces import face_links
+from singmesh.boxes.faces import face_links, leaf_sides
 from singmesh.boxes.octree import refine_stars, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
-from singmesh.skeleton.curves import skeleton_links
+from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
 from singmesh.skeleton.singular_curves import singular_curves
@@ -114,11 +114,16 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
     keep = np.concatenate([cubes, tube_regions(b, fine_level, curves)]) if len(curves.points) else cubes
     tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
-    events = compute_events(surf, tree)
-    links = face_links(tree, events)
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
-    cubes = star_cubes(tree, links, centres) if len(points) else None
+    if len(points):
+        # The stars grow along the leaves' adjacency alone: this tree's
+        # events and links would be replaced by the refined tree's.
+        cubes = star_cubes(tree, leaf_sides(tree), centres)
+    else:
+        cubes = None
+        events = compute_events(surf, tree)
+        links = face_links(tree, events)
     first = tree
     for attempt in range(tol.STAR_RETRIES + 1):
         if cubes is not None:
@@ -281,14 +286,21 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
     branches = {}
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
-    for c in np.nonzero(~plain & ~tube)[0]:
+    star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
+    # The skeleton curves of all star cycles are traced in one batch.
+    jobs = []
+    for c in star_cycles:
+        p = points[stars[cycles.box[c]]].point
+        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
+        squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
+        jobs.append((p, events.point[ev[span]], squares, skeleton_directions(surf.hessian(p))))
+    all_spokes = skeleton_links_many(surf, jobs)
+    for c, spokes in zip(star_cycles, all_spokes):
         i = stars[cycles.box[c]]
         p = points[i].point
         span = slice(cycles.offsets[c], cycles.offsets[c + 1])
         cyc = ev[span]
         cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
-        squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
-        spokes = skeleton_links(surf, p, cyc_pts, squares, skeleton_directions(surf.hessian(p)))
         polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
                                                  cycle_squares=cycles.squares[span])
         splits.update(split)

@@ -139,7 +139,8 @@ def centre(surface: Surface, p: np.ndarray, reach: float,
     """
     p = np.asarray(p, dtype=float)
     start = p.copy()
-    analyse(surface, p)  # NotSingularError if p is not singular
+    first = analyse(surface, p)  # NotSingularError if p is not singular
+    moved = False
     for _ in range(tol.CENTRE_STEPS):
         # Read the type with a loose rank test: off the centre of a D5 the
         # Hessian has a small eigenvalue (~ the offset), and only corank 2
@@ -151,8 +152,10 @@ def centre(surface: Surface, p: np.ndarray, reach: float,
         q = p + step
         if np.linalg.norm(q - start) > reach or float(residual(surface, q[None])[0]) > limit:
             break
-        p = q
+        p, moved = q, True
         if np.linalg.norm(step) <= tol.CENTRE_STOP * (1.0 + np.abs(p).max()):
             break
-    t, frame = analyse(surface, p)
+    # Unmoved (a node, or a point already at its centre): the type read at
+    # the start is the type (analyse is a function of the point).
+    t, frame = analyse(surface, p) if moved else first
     return p, t, frame

@@ -49,95 +49,6 @@ class SkeletonLink:
     vertex: int | None = None
 
 
-def _face_node(surface: Surface, v: np.ndarray, a: np.ndarray, b: np.ndarray, square: np.ndarray):
-    """Point of F = 0, grad F . v = 0 in a face square, on the arc from a to b.
-
-    ``square`` is (axis, lo, hi) with lo, hi the square's corners in space.
-    Newton starts half-way between the link's midpoint and the square's
-    centre: two arcs with the same end points (the two halves of a thin
-    lens) then find their own nodes.
-    """
-    axis, lo, hi = square
-    u, w = [i for i in range(3) if i != axis]
-    q = 0.5 * (0.5 * (a + b) + 0.5 * (lo + hi))
-    q[axis] = a[axis]
-    for _ in range(30):
-        f, g, h = surface.jet(q)
-        gv = g @ v
-        hv = h @ v
-        jac = np.array([[g[u], g[w]], [hv[u], hv[w]]])
-        try:
-            step = np.linalg.solve(jac, [f, gv])
-        except np.linalg.LinAlgError:
-            return None
-        q = q.copy()
-        q[u] -= step[0]
-        q[w] -= step[1]
-        if np.abs(step).max() < 1e-15 * (1 + np.abs(q).max()):
-            break
-    if not np.isfinite(q).all() or abs(surface(q)) > 1e-11 * (1 + np.abs(surface.gradient(q)).max()):
-        return None
-    # The node must lie in this link's square.
-    slack = 1e-9 * (hi - lo).max()
-    if (q < lo - slack).any() or (q > hi + slack).any():
-        return None
-    d = b - a
-    t = float(np.clip(np.dot(q - a, d) / max(np.dot(d, d), 1e-300), 0, 1))
-    return q, t
-
-
-def _correct(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: int = 20):
-    """Gauss-Newton (minimum-norm steps) from q onto F = 0, grad F . v = 0."""
-    for _ in range(iterations):
-        f, g, h = surface.jet(q)
-        r = np.array([f, g @ v])
-        j = np.stack([g, h @ v])
-        # Minimum-norm step j^T (j j^T)^-1 r: a 2x2 solve, cheaper than pinv.
-        jj = j @ j.T
-        if abs(np.linalg.det(jj)) <= 1e-300:
-            break
-        step = j.T @ np.linalg.solve(jj, r)
-        q = q - step
-        if np.linalg.norm(step) < 1e-15 * (1 + np.linalg.norm(q)):
-            break
-    return q
-
-
-def trace_to_point(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndarray, pieces: int = 3):
-    """Trace V(F, grad F . v) from ``node`` to ``p``; None if it does not get there.
-
-    The curve is followed in ``pieces`` steps of a third of the distance:
-    predictor along the tangent grad F x grad G (oriented towards p),
-    corrector onto the curve.  It must come closer to p at every step and
-    end within one step of p.
-    """
-    dist0 = np.linalg.norm(node - p)
-    if dist0 == 0:
-        return None
-    h = dist0 / pieces
-    q = node.copy()
-    points = []
-    for k in range(pieces - 1):
-        _, g, hess = surface.jet(q)
-        tangent = np.cross(g, hess @ v)
-        norm = np.linalg.norm(tangent)
-        if norm == 0:
-            return None
-        tangent /= norm
-        if np.dot(tangent, p - q) < 0:
-            tangent = -tangent
-        target = dist0 * (pieces - 1 - k) / pieces
-        guess = q + h * tangent
-        new = _correct(surface, v, guess)
-        d = np.linalg.norm(new - p)
-        on = abs(surface(new)) <= 1e-10 * (1 + np.abs(surface.gradient(new)).max()) * max(dist0, 1e-300)
-        if not on or not np.isfinite(new).all() or abs(d - target) > 0.5 * h or np.linalg.norm(new - q) > 2 * h:
-            return None
-        points.append(new)
-        q = new
-    return np.array(points).reshape(-1, 3)
-
-
 def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, squares: list,
                    directions: np.ndarray, want: int = 4, max_directions: int = 2) -> list[SkeletonLink]:
     """Face nodes on one link cycle of p whose skeleton curve reaches p.
@@ -156,39 +67,229 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, sq
     -------
     list of SkeletonLink, ordered along the cycle
     """
-    m = len(cycle_points)
-    links: list[SkeletonLink] = []
-    used = 0
-    for v in directions:
-        if used >= max_directions or len(links) >= want:
+    return skeleton_links_many(surface, [(p, cycle_points, squares, directions)], want, max_directions)[0]
+
+
+# ------------------------------------------------------------- all at once
+def _solve_stack(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Solve stacked systems a x = b; (x, ok), ok False where a is singular.
+
+    One LAPACK call for the stack; only if one of them is singular are they
+    solved one by one, to tell which.
+    """
+    try:
+        return np.linalg.solve(a, b[..., None])[..., 0], np.ones(len(a), bool)
+    except np.linalg.LinAlgError:
+        x = np.zeros(b.shape)
+        ok = np.ones(len(a), bool)
+        for k in range(len(a)):
+            try:
+                x[k] = np.linalg.solve(a[k], b[k])
+            except np.linalg.LinAlgError:
+                ok[k] = False
+        return x, ok
+
+
+def _face_nodes(surface: Surface, v, a, b, axis, lo, hi):
+    """Points of F = 0, grad F . v = 0 in face squares, on the arcs from a to b.
+
+    One row per link: its v, end points ``a``, ``b`` and face square (the
+    ``axis`` normal to it, corners ``lo``, ``hi`` in space).  Newton in the
+    face's plane starts half-way between the link's midpoint and the
+    square's centre: two arcs with the same end points (the two halves of
+    a thin lens) then find their own nodes.
+
+    Returns
+    -------
+    q : (K, 3) the nodes
+    t : (K,) place of each along its link (0..1), to order them
+    ok : (K,) False where Newton failed or the node is outside the square
+    """
+    k = len(v)
+    rows = np.arange(k)
+    u = np.where(axis == 0, 1, 0)
+    w = np.where(axis == 2, 1, 2)
+    q = 0.5 * (0.5 * (a + b) + 0.5 * (lo + hi))
+    q[rows, axis] = a[rows, axis]
+    ok = np.ones(k, bool)
+    live = np.ones(k, bool)
+    with np.errstate(all="ignore"):
+        for _ in range(30):
+            at = np.nonzero(live)[0]
+            if len(at) == 0:
+                break
+            f, g, h = surface.jet(q[at])
+            r = np.arange(len(at))
+            gv = np.einsum("ki,ki->k", g, v[at])
+            hv = np.einsum("kij,kj->ki", h, v[at])
+            uu, ww = u[at], w[at]
+            jac = np.stack([np.stack([g[r, uu], g[r, ww]], 1), np.stack([hv[r, uu], hv[r, ww]], 1)], 1)
+            step, solved = _solve_stack(jac, np.stack([f, gv], 1))
+            ok[at[~solved]] = False
+            live[at[~solved]] = False
+            at, step, uu, ww = at[solved], step[solved], uu[solved], ww[solved]
+            q[at, uu] -= step[:, 0]
+            q[at, ww] -= step[:, 1]
+            live[at[np.abs(step).max(axis=1) < 1e-15 * (1 + np.abs(q[at]).max(axis=1))]] = False
+        ok &= np.isfinite(q).all(axis=1)
+        at = np.nonzero(ok)[0]
+        ok[at] = ~(np.abs(surface(q[at])) > 1e-11 * (1 + np.abs(surface.gradient(q[at])).max(axis=1)))
+        # The node must lie in this link's square.
+        slack = 1e-9 * (hi - lo).max(axis=1, keepdims=True)
+        ok &= ~((q < lo - slack).any(axis=1) | (q > hi + slack).any(axis=1))
+        d = b - a
+        t = np.clip(np.einsum("ki,ki->k", q - a, d) / np.maximum(np.einsum("ki,ki->k", d, d), 1e-300), 0, 1)
+    return q, t, ok
+
+
+def _correct_many(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: int = 20) -> np.ndarray:
+    """Gauss-Newton (minimum-norm steps) from each q onto F = 0, grad F . v = 0 (its own v)."""
+    q = np.array(q, dtype=float)
+    live = np.ones(len(q), bool)
+    for _ in range(iterations):
+        at = np.nonzero(live)[0]
+        if len(at) == 0:
             break
-        g = surface.gradient(cycle_points) @ v
-        found = []
-        for i in range(m):
-            a, b = cycle_points[i], cycle_points[(i + 1) % m]
-            if g[i] * g[(i + 1) % m] >= 0:
+        f, g, h = surface.jet(q[at])
+        r = np.stack([f, np.einsum("ki,ki->k", g, v[at])], 1)
+        j = np.stack([g, np.einsum("kij,kj->ki", h, v[at])], 1)  # (n, 2, 3)
+        jj = j @ j.transpose(0, 2, 1)
+        flat = np.abs(np.linalg.det(jj)) <= 1e-300
+        live[at[flat]] = False
+        at, j, jj, r = at[~flat], j[~flat], jj[~flat], r[~flat]
+        sol, solved = _solve_stack(jj, r)
+        live[at[~solved]] = False
+        at, j, sol = at[solved], j[solved], sol[solved]
+        step = np.einsum("kji,kj->ki", j, sol)
+        q[at] = q[at] - step
+        live[at[np.linalg.norm(step, axis=1) < 1e-15 * (1 + np.linalg.norm(q[at], axis=1))]] = False
+    return q
+
+
+def _trace_many(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndarray, pieces: int = 3):
+    """Trace V(F, grad F . v) from each node to its p; ok False where it does not get there.
+
+    The curve is followed in ``pieces`` steps of a fraction of the distance:
+    predictor along the tangent grad F x grad G (oriented towards p),
+    corrector onto the curve.  It must come closer to p at every step and
+    end within one step of p.
+
+    Returns
+    -------
+    points : (K, pieces - 1, 3) the points from the node towards p (p excluded)
+    ok : (K,) bool
+    """
+    dist0 = np.linalg.norm(node - p, axis=1)
+    ok = dist0 != 0
+    h = dist0 / pieces
+    q = node.copy()
+    points = np.zeros((len(node), pieces - 1, 3))
+    with np.errstate(all="ignore"):
+        for k in range(pieces - 1):
+            at = np.nonzero(ok)[0]
+            if len(at) == 0:
+                break
+            _, g, hess = surface.jet(q[at])
+            tangent = np.cross(g, np.einsum("kij,kj->ki", hess, v[at]))
+            norm = np.linalg.norm(tangent, axis=1)
+            ok[at[norm == 0]] = False
+            at, tangent, norm = at[norm != 0], tangent[norm != 0], norm[norm != 0]
+            tangent /= norm[:, None]
+            tangent[np.einsum("ki,ki->k", tangent, p[at] - q[at]) < 0] *= -1
+            target = dist0[at] * (pieces - 1 - k) / pieces
+            new = _correct_many(surface, v[at], q[at] + h[at, None] * tangent)
+            d = np.linalg.norm(new - p[at], axis=1)
+            on = np.abs(surface(new)) <= (1e-10 * (1 + np.abs(surface.gradient(new)).max(axis=1))
+                                          * np.maximum(dist0[at], 1e-300))
+            bad = (~on | ~np.isfinite(new).all(axis=1) | (np.abs(d - target) > 0.5 * h[at])
+                   | (np.linalg.norm(new - q[at], axis=1) > 2 * h[at]))
+            ok[at[bad]] = False
+            points[at, k] = new
+            q[at] = new
+    return points, ok
+
+
+def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
+                        max_directions: int = 2) -> list[list[SkeletonLink]]:
+    """:func:`skeleton_links` for many cycles at once.
+
+    Parameters
+    ----------
+    jobs : list of (p, cycle_points, squares, directions)
+        The arguments of :func:`skeleton_links` for each cycle.
+
+    Returns
+    -------
+    list of lists of SkeletonLink, one per job
+
+    Notes
+    -----
+    Each round tries every unfinished cycle's next direction: the sign
+    changes of grad F . v along all those cycles, the face nodes and their
+    traces to p are each one batched Newton run; only the choice of nodes
+    along a cycle (skip one next to a node kept before it) is a loop.
+    """
+    n = len(jobs)
+    links: list[list[SkeletonLink]] = [[] for _ in range(n)]
+    used = [0] * n
+    nxt = [0] * n
+    while True:
+        active = [c for c in range(n) if used[c] < max_directions and len(links[c]) < want
+                  and nxt[c] < len(jobs[c][3])]
+        if not active:
+            break
+        # Sign changes of G = grad F . v between consecutive cycle vertices.
+        vs = [np.asarray(jobs[c][3][nxt[c]], float) for c in active]
+        pts = [np.asarray(jobs[c][1], float) for c in active]
+        sizes = np.array([len(q) for q in pts])
+        allp = np.concatenate(pts)
+        g = np.einsum("ki,ki->k", surface.gradient(allp), np.repeat(np.array(vs), sizes, axis=0))
+        cyc, idx = [], []
+        start = 0
+        for j, m in enumerate(sizes.tolist()):
+            gi = g[start:start + m]
+            cross = np.nonzero(~(gi * np.roll(gi, -1) >= 0))[0]
+            cyc.extend([j] * len(cross))
+            idx.extend(cross.tolist())
+            start += m
+        cyc, idx = np.array(cyc, np.int64), np.array(idx, np.int64)
+        if len(cyc):
+            a = np.array([pts[j][i] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
+            b = np.array([pts[j][(i + 1) % sizes[j]] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
+            sq = [jobs[active[j]][2][i] for j, i in zip(cyc.tolist(), idx.tolist())]
+            axis = np.array([int(s[0]) for s in sq], np.int64)
+            lo = np.array([s[1] for s in sq], float).reshape(-1, 3)
+            hi = np.array([s[2] for s in sq], float).reshape(-1, 3)
+            v = np.array(vs)[cyc]
+            node, t, ok = _face_nodes(surface, v, a, b, axis, lo, hi)
+            near = tol.NODE_ON_VERTEX * np.linalg.norm(b - a, axis=1)
+            vertex = np.full(len(cyc), -1, np.int64)
+            on_a = ok & (np.linalg.norm(node - a, axis=1) <= near)
+            on_b = ok & ~on_a & (np.linalg.norm(node - b, axis=1) <= near)
+            node[on_a], t[on_a], vertex[on_a] = a[on_a], 0.0, idx[on_a]
+            node[on_b], t[on_b], vertex[on_b] = b[on_b], 1.0, (idx[on_b] + 1) % sizes[cyc[on_b]]
+            centre = np.array([jobs[active[j]][0] for j in cyc.tolist()], float).reshape(-1, 3)
+            trace, traced = np.zeros((len(cyc), 2, 3)), np.zeros(len(cyc), bool)
+            if ok.any():
+                trace[ok], traced[ok] = _trace_many(surface, v[ok], node[ok], centre[ok])
+        found: list[list[SkeletonLink]] = [[] for _ in active]
+        for k in range(len(cyc)):
+            j = int(cyc[k])
+            if not ok[k]:
                 continue
-            res = _face_node(surface, v, a, b, squares[i])
-            if res is None:
-                continue
-            node, t = res
-            near = tol.NODE_ON_VERTEX * np.linalg.norm(b - a)
-            vertex = None
-            # A node on (or next to) a cycle vertex: the skeleton passes
-            # through that vertex; anchor the spoke there.  A separate node a
-            # hair away would leave a sliver between the two.
-            if np.linalg.norm(node - a) <= near:
-                vertex, node, t = i, a.copy(), 0.0
-            elif np.linalg.norm(node - b) <= near:
-                vertex, node, t = (i + 1) % m, b.copy(), 1.0
-            if any(np.linalg.norm(node - s.node) <= near for s in links + found):
+            c = active[j]
+            if any(np.linalg.norm(node[k] - s.node) <= near[k] for s in links[c] + found[j]):
                 continue  # two directions crossing the cycle at one point
-            trace = trace_to_point(surface, v, node, p)
-            if trace is None:
+            if not traced[k]:
                 continue
-            found.append(SkeletonLink(after=i, t=t, node=node, trace=trace, direction=v, vertex=vertex))
-        if found:
-            links.extend(found)
-            used += 1
-    links.sort(key=lambda s: (s.after, s.t))
+            found[j].append(SkeletonLink(after=int(idx[k]), t=float(t[k]), node=node[k].copy(),
+                                         trace=trace[k].copy(), direction=vs[j],
+                                         vertex=None if vertex[k] < 0 else int(vertex[k])))
+        for j, c in enumerate(active):
+            nxt[c] += 1
+            if found[j]:
+                links[c].extend(found[j])
+                used[c] += 1
+    for lk in links:
+        lk.sort(key=lambda s: (s.after, s.t))
     return links

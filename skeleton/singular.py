@@ -54,15 +54,21 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
     offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
     while todo:
         t, corner, lvl = todo.pop()
-        keep = np.ones(len(corner), bool)
-        # A derivative along an axis F does not depend on is zero: no test.
-        for c in [t] + [derivative(t, a) for a in axes if t.shape[1 + a] > 1]:
+        # F first, then each derivative on the boxes still kept: the same
+        # boxes as testing all four everywhere, with the differences taken
+        # only where needed.  A derivative along an axis F does not depend
+        # on is zero: no test.
+        for a in [None] + [a for a in axes if t.shape[1 + a] > 1]:
+            if len(corner) == 0:
+                break
+            c = t if a is None else derivative(t, a)
             flat = c.reshape(len(c), -1)
             # Exact zeros at box corners come out of the conversion as
             # +-1e-17: allow for the rounding, relative to the coefficients.
             slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
-            keep &= (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
-        t, corner = t[keep], corner[keep]
+            keep = (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+            if not keep.all():
+                t, corner = t[keep], corner[keep]
         if len(corner) == 0:
             continue
         if lvl == level:
@@ -196,11 +202,13 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     limit = accept_residual(surface)
     found: list[SingularPoint] = []
     regions: list[tuple[np.ndarray, float]] = []   # centres and the radius their starts fall in
+    # The curve test of every start, in one batch (a few are not needed).
+    along = _on_curve_many(surface, x, cell, steps=(4, 8))
     with np.errstate(all="ignore"):
-        for p in x:
+        for p, on in zip(x, along.tolist()):
             if any(np.linalg.norm(p - c) <= r for c, r in regions):
                 continue  # another start in the region of a point already centred
-            if _on_curve(surface, p, cell, steps=(4, 8)):
+            if on:
                 # On a curve of singular points: not a point, and no need
                 # to classify it (the costliest kind to classify).
                 curve = True
@@ -335,20 +343,32 @@ def _on_curve(surface: Surface, p: np.ndarray, cell: float, steps=(2,)) -> bool:
     once the classifier found a non-simple point; at four and eight any
     A_k up to A7).
     """
-    w, v = np.linalg.eigh(surface.hessian(p))
-    kernel = v[:, np.abs(w) <= tol.CENTRE_RANK_RTOL * max(np.abs(w).max(), 1e-300)]
-    for d in kernel.T:
-        hits = 0
-        for k in steps:
-            for sign in (1.0, -1.0):
-                start = p + sign * k * cell * d
-                q = gauss_newton(surface, start[None], iterations=40, max_step=cell, across=d)[0]
-                if np.abs(q - start).max() <= 1.5 * cell and residual(surface, q[None])[0] <= tol.CURVE_RESIDUAL:
-                    hits += 1
-                    break
-        if hits == len(steps):
-            return True
-    return False
+    return bool(_on_curve_many(surface, np.asarray(p, float)[None], cell, steps)[0])
+
+
+def _on_curve_many(surface: Surface, points: np.ndarray, cell: float, steps=(2,)) -> np.ndarray:
+    """:func:`_on_curve` for many points: all their Newton runs in one batch."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    w, v = np.linalg.eigh(surface.hessian(points))
+    scale = np.maximum(np.abs(w).max(axis=1, initial=0.0), 1e-300)
+    kernel = np.abs(w) <= tol.CENTRE_RANK_RTOL * scale[:, None]   # (K, 3)
+    pt, col = np.nonzero(kernel)
+    if len(pt) == 0:
+        return np.zeros(len(points), bool)
+    d = v[pt, :, col]                                             # (J, 3) kernel directions
+    shifts = np.array([sign * k for k in steps for sign in (1.0, -1.0)])  # (S,)
+    start = points[pt][:, None, :] + shifts[None, :, None] * cell * d[:, None, :]   # (J, S, 3)
+    across = np.repeat(d, len(shifts), axis=0)
+    start = start.reshape(-1, 3)
+    q = gauss_newton(surface, start, iterations=40, max_step=cell, across=across)
+    with np.errstate(all="ignore"):
+        good = np.abs(q - start).max(axis=1) <= 1.5 * cell
+        good[good] = residual(surface, q[good]) <= tol.CURVE_RESIDUAL
+    # A direction is along a curve when, at every step, either sign lands.
+    hit = good.reshape(len(d), len(steps), 2).any(axis=2).all(axis=1)
+    out = np.zeros(len(points), bool)
+    out[pt[hit]] = True
+    return out
 
 
 def _dense_chains(x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:
