@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from meshcheck import fans_at  # noqa: E402
 
 #: Starting points per axis for the independent node search.
-STARTS = {"barth10": 48, "endrass": 48}
+STARTS = {"barth10": 48, "endrass": 48, "chmutov7": 32, "chmutov8": 32, "chmutov9": 32, "chmutov10": 32}
 
 
 def main(argv=None) -> int:

@@ -129,6 +129,44 @@ LARGE = {
 }
 
 
+def _chebyshev_text(d: int, v: str) -> str:
+    """T_d(v) written out, its integer coefficients from the recurrence
+    T_{k+1} = 2 v T_k - T_{k-1} (not from sympy, which gives the reference)."""
+    prev, cur = [1], [0, 1]
+    for _ in range(d - 1):
+        nxt = [0] + [2 * c for c in cur]
+        for i, c in enumerate(prev):
+            nxt[i] -= c
+        prev, cur = cur, nxt
+    cur = cur if d > 0 else prev
+    terms = [f"{'-' if c < 0 else '+'} {abs(c)} {v}^{e}" for e, c in enumerate(cur) if c]
+    return "(" + " ".join(reversed(terms)) + ")"
+
+
+def _chmutov(d: int) -> NodalSurface:
+    """Chmutov's surface T_d(x) + T_d(y) + T_d(z) + 1 = 0 (T_d Chebyshev).
+
+    Its singular points are the critical points of the T_d where two of
+    them are -1 and one is +1: for even d, 3 (d/2)^2 (d/2 - 1) nodes; for
+    odd d, 3 ((d-1)/2)^3; all in (-1, 1)^3, some on the planes x, y or z = 0.
+    """
+    h = d // 2
+    count = 3 * h * h * (h - 1) if d % 2 == 0 else 3 * h ** 3
+    return NodalSurface(
+        name=f"Chmutov {d}",
+        text=" + ".join(_chebyshev_text(d, v) for v in "xyz") + " + 1",
+        expr=sympy.chebyshevt(d, x) + sympy.chebyshevt(d, y) + sympy.chebyshevt(d, z) + 1,
+        box=((-1.25, 1.25),) * 3,
+        expected=count,
+    )
+
+
+#: Chmutov's surfaces (benchmarks/bench_many_nodes.py): 81 nodes at degree
+#: 7, 144 at 8, 192 at 9 (counts checked by :func:`find_nodes` with 32
+#: starts per axis), 300 at 10.
+LARGE.update({f"chmutov{d}": _chmutov(d) for d in (7, 8, 9, 10)})
+
+
 # ---------------------------------------------------------------- evaluation
 class _Numeric:
     """Vectorised F, grad F and Hessian of a polynomial given by sympy.
