@@ -369,7 +369,11 @@ def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
             continue
         # Where no singular point is found between the ends, the first end
         # (on the curve) is the meeting point.
-        meet = _meeting_point(surface, ends[comp], out[comp], h)
+        if len(comp) >= 3:
+            meet = _meeting_point(surface, ends[comp], out[comp], h)
+        else:  # one curve lost from both sides: a point between the ends
+            z, ok = _correct(surface, ends[comp].mean(axis=0)[None], None, tol.CURVE_JOIN * h)
+            meet = z[0] if ok[0] else None
         if meet is None:
             meet = ends[comp[0]]
         for c in comp:
@@ -385,9 +389,9 @@ def _meeting_point(surface: Surface, ends: np.ndarray, directions: np.ndarray, h
     Traces are lost where curves of singular points meet and the locus is
     not a smooth curve (two cuspidal edges crossing, as on Crixxi).  The
     lines from the ends along their directions nearly meet there (least
-    squares); Newton puts that point on the locus, and along the curve it
-    is moved to the minimum of :func:`_degeneracy`, which vanishes only
-    at the meeting point.
+    squares); Newton puts that point on the locus.  Along the curve the
+    minimum of :func:`_degeneracy` (which vanishes only at the meeting
+    point) is searched too, and the better of the two kept.
     """
     t = directions / np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
     proj = np.eye(3)[None] - t[:, :, None] * t[:, None, :]
@@ -404,16 +408,23 @@ def _meeting_point(surface: Surface, ends: np.ndarray, directions: np.ndarray, h
     u = t[0]
 
     def point(s):
-        y, good = _correct(surface, (z[0] + s * u)[None], u[None], 2 * h)
-        return y[0] if good[0] else None
+        return _correct(surface, (z[0] + s * u)[None], u[None], 2 * h)[0][0]
 
     def measure(s):
+        # Newton converges slowly next to the meeting point (the locus is
+        # more degenerate there): its point is measured even if it has not
+        # reached rounding level, or the search would shun the minimum.
         y = point(s)
-        return np.inf if y is None else _degeneracy(surface, y, rank1)
+        return _degeneracy(surface, y, rank1) if np.isfinite(y).all() else np.inf
 
     best = _golden(measure, -h, h, tol.CURVE_CROSSING_STEPS)
-    y = point(best)
-    return z[0] if y is None else y
+    y, good = _correct(surface, point(best)[None], None, h)
+    # The lines' meeting point is often nearer already (the search can be
+    # led off by points Newton left short of the locus): the less
+    # degenerate of the two is kept.
+    if good[0] and _degeneracy(surface, y[0], rank1) < _degeneracy(surface, z[0], rank1):
+        return y[0]
+    return z[0]
 
 
 def _golden(f, lo: float, hi: float, steps: int) -> float:
