@@ -787,7 +787,7 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
         branch = {names[w] for w in g.neighbors(v)}
         if deg[v] >= 6:
             special[v] = "triple point"
-        elif branch == {"A2 cuspidal edge"}:
+        elif branch == {"A2 cuspidal edge"} and _transversal_branches(P, v, list(g.neighbors(v))):
             special[v] = "crossing of cuspidal edges"
         else:
             special[v] = "crossing of curves"
@@ -874,6 +874,17 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
                                     ends=ends, vertices=np.asarray(verts, np.int64)))
     return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
                     special_vertex=np.asarray(sp_vertices, np.int64))
+
+
+def _transversal_branches(P: np.ndarray, v: int, neighbours: list) -> bool:
+    """Whether the edges at v leave in two directions at an angle (two curves crossing).
+
+    Two traces of one curve side by side also make a cluster of vertices
+    of degree four, but their branches are all parallel.
+    """
+    d = P[neighbours] - P[v]
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return bool((np.abs(d @ d[0]) < 0.9).any())
 
 
 def _near_crossings(g: nx.Graph, P: np.ndarray, cross: np.ndarray, names: list, sheets: np.ndarray,
