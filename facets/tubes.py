@@ -26,12 +26,20 @@ from singmesh.boxes.octree import Octree
 
 #: Special points of curves where sheets meet tangentially: the tube is
 #: wider around them (``CURVE_BALL_GROW``).
-BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of type")
+BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of type", "crossing of cuspidal edges")
+
+#: Special points where the half-sheets of the curves meeting there stay
+#: closer than a cell far out (where two cuspidal edges cross, the two
+#: half-sheets between them are a lens as thin as the cube of the
+#: distance): the whole ball of ``CURVE_MEET_BALL`` cells around them is
+#: tube, its strips joining the rails where the sheets are apart to the
+#: curves inside.
+MEET_KINDS = ("crossing of cuspidal edges",)
 
 
-def balls(curves) -> np.ndarray:
+def balls(curves, kinds=BALL_KINDS) -> np.ndarray:
     """The special points of a :class:`~singmesh.skeleton.singular_curves.CurveSet` the tube widens around."""
-    return np.array([sp.point for sp in curves.special if sp.kind in BALL_KINDS]).reshape(-1, 3)
+    return np.array([sp.point for sp in curves.special if sp.kind in kinds]).reshape(-1, 3)
 
 
 def tangent_edges(curves) -> np.ndarray:
@@ -53,16 +61,19 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     wide = tangent_edges(curves)
     b = balls(curves)
     reach = (tol.CURVE_BALL_GROW + 2) * cell
+    m = balls(curves, MEET_KINDS)
+    meet_reach = (tol.CURVE_MEET_BALL + 2) * cell
     return np.concatenate([
         _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
         _block_regions(box, fine_level, curves.points, curves.edges[wide],
                        pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
-        np.stack([b - reach, b + reach], axis=1)])
+        np.stack([b - reach, b + reach], axis=1), np.stack([m - meet_reach, m + meet_reach], axis=1)])
 
 
 def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
     """Which leaves form the tube around the curves of a CurveSet: (N,) bool."""
-    return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves))
+    return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves),
+                        balls(curves, MEET_KINDS))
 
 
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
@@ -103,7 +114,8 @@ def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, ed
 
 
 def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
-                 balls: np.ndarray | None = None, wide: np.ndarray | None = None) -> np.ndarray:
+                 balls: np.ndarray | None = None, wide: np.ndarray | None = None,
+                 meets: np.ndarray | None = None) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets
@@ -112,6 +124,8 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     ``wide`` (tangent sheets: a tacnode edge, whose sheets part only as
     the square of the distance) the tube's radius is
     ``CURVE_TANGENT_RADIUS``, so that the sheets are apart where they leave it.
+    Around the points ``meets`` (cuspidal edges crossing) every leaf within
+    ``CURVE_MEET_BALL`` cells is tube.
 
     Returns
     -------
@@ -138,6 +152,10 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
         b = (np.asarray(balls, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
         d_ball, _ = cKDTree(b).query(centre, p=np.inf)
         reach |= d_ball <= half + tol.CURVE_BALL_GROW
+    if meets is not None and len(meets):
+        m = (np.asarray(meets, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
+        d_meet, _ = cKDTree(m).query(centre, p=np.inf)
+        inside |= d_meet <= half + tol.CURVE_MEET_BALL
     # Leaves that failed the simplicity test next to the tube join it:
     # outside it every leaf must be a union of discs.
     both = (links.minus >= 0) & (links.plus >= 0)

@@ -267,6 +267,13 @@ CURVE_MERGE = 0.3
 #: to this many cells away (the sheets meet tangentially there).
 CURVE_BALL_GROW = 10.0
 
+#: Around a point where two cuspidal edges cross (Crixxi's (0, +-1, 0))
+#: every leaf within this many cells is tube: the two half-sheets between
+#: the edges form a lens whose thickness falls as the cube of the
+#: distance, closer than the octree can part (Crixxi at 256 cells: 1.6
+#: cells apart at 0.27, 2 at 24 cells).
+CURVE_MEET_BALL = 24.0
+
 #: The square-free part is computed (sympy, exact) for polynomials with at
 #: most this many terms; beyond, sympy's factoring takes seconds.
 SQUAREFREE_MAX_TERMS = 400

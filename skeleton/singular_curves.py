@@ -355,6 +355,9 @@ def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
     if not lost:
         return lines
     ends = np.array([lines[k][0][e] for k, e in lost])
+    # Each lost end's direction, outwards (towards where the curve was lost).
+    out = np.array([lines[k][0][e] - lines[k][0][1 if e == 0 else -2] if len(lines[k][0]) > 1 else np.zeros(3)
+                    for k, e in lost])
     pairs = cKDTree(ends).query_pairs(tol.CURVE_JOIN * h, output_type="ndarray")
     g = nx.Graph()
     g.add_nodes_from(range(len(lost)))
@@ -364,16 +367,119 @@ def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
         comp = sorted(comp)
         if len(comp) < 2:
             continue
-        start = ends[comp].mean(axis=0)
-        z, ok = _correct(surface, start[None], None, tol.CURVE_JOIN * h)
-        # Where Newton finds no singular point between the ends, the
-        # first end (on the curve) is the meeting point.
-        meet = z[0] if ok[0] else ends[comp[0]]
+        # Where no singular point is found between the ends, the first end
+        # (on the curve) is the meeting point.
+        if len(comp) >= 3:
+            meet = _meeting_point(surface, ends[comp], out[comp], h)
+        else:  # one curve lost from both sides: a point between the ends
+            z, ok = _correct(surface, ends[comp].mean(axis=0)[None], None, tol.CURVE_JOIN * h)
+            meet = z[0] if ok[0] else None
+        if meet is None:
+            meet = ends[comp[0]]
         for c in comp:
             k, e = lost[c]
             p, closed = lines[k]
             lines[k] = (np.vstack([meet[None], p]) if e == 0 else np.vstack([p, meet[None]]), closed)
     return lines
+
+
+def _meeting_point(surface: Surface, ends: np.ndarray, directions: np.ndarray, h: float) -> np.ndarray | None:
+    """The point of the singular locus where traces lost near ``ends`` meet, or None.
+
+    Traces are lost where curves of singular points meet and the locus is
+    not a smooth curve (two cuspidal edges crossing, as on Crixxi).  The
+    lines from the ends along their directions nearly meet there (least
+    squares); Newton puts that point on the locus.  Along the curve the
+    minimum of :func:`_degeneracy` (which vanishes only at the meeting
+    point) is searched too, and the better of the two kept.
+    """
+    t = directions / np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-300)
+    proj = np.eye(3)[None] - t[:, :, None] * t[:, None, :]
+    a, b = proj.sum(axis=0), np.einsum("kij,kj->i", proj, ends)
+    start = ends.mean(axis=0)
+    if np.linalg.cond(a) < 1e6:
+        x = np.linalg.solve(a, b)
+        if np.linalg.norm(x - start) <= tol.CURVE_JOIN * h:
+            start = x
+    z, ok = _correct(surface, start[None], None, tol.CURVE_JOIN * h)
+    if not ok[0]:
+        return None
+    rank1 = _rank_one(surface, ends)
+    u = t[0]
+
+    def point(s):
+        return _correct(surface, (z[0] + s * u)[None], u[None], 2 * h)[0][0]
+
+    def measure(s):
+        # Newton converges slowly next to the meeting point (the locus is
+        # more degenerate there): its point is measured even if it has not
+        # reached rounding level, or the search would shun the minimum.
+        y = point(s)
+        return _degeneracy(surface, y, rank1) if np.isfinite(y).all() else np.inf
+
+    best = _golden(measure, -h, h, tol.CURVE_CROSSING_STEPS)
+    y, good = _correct(surface, point(best)[None], None, h)
+    # The lines' meeting point is often nearer already (the search can be
+    # led off by points Newton left short of the locus): the less
+    # degenerate of the two is kept.
+    if good[0] and _degeneracy(surface, y[0], rank1) < _degeneracy(surface, z[0], rank1):
+        return y[0]
+    return z[0]
+
+
+def _golden(f, lo: float, hi: float, steps: int) -> float:
+    """Minimum of f on [lo, hi] by golden section."""
+    g = (np.sqrt(5.0) - 1) / 2
+    c, d = hi - g * (hi - lo), lo + g * (hi - lo)
+    fc, fd = f(c), f(d)
+    for _ in range(steps):
+        if fc <= fd:
+            hi, d, fd = d, c, fc
+            c = hi - g * (hi - lo)
+            fc = f(c)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + g * (hi - lo)
+            fd = f(d)
+    return (lo + hi) / 2
+
+
+def _rank_one(surface: Surface, x: np.ndarray) -> bool:
+    """Whether the Hessian has rank one at the curve points x (k, 3): a cuspidal or tacnode edge."""
+    sv = np.linalg.svd(surface.hessian(np.asarray(x, float).reshape(-1, 3)), compute_uv=False)
+    return bool(np.median(sv[:, 1] / np.maximum(sv[:, 0], 1e-300)) <= tol.CURVE_RANK_RTOL ** 0.5)
+
+
+def third_derivatives(surface: Surface, x: np.ndarray) -> np.ndarray:
+    """The tensor of third derivatives of F at one point x: (3, 3, 3)."""
+    from singmesh.surface import _differentiate, evaluate_tensor
+
+    cache = surface.__dict__.setdefault("_cache", {})
+    if "third" not in cache:
+        h = surface.hessian_coeffs
+        cache["third"] = [[[_differentiate(h[i][j], k) for k in range(3)] for j in range(3)] for i in range(3)]
+    c = cache["third"]
+    return np.array([[[float(evaluate_tensor(c[i][j][k], x[None])[0]) for k in range(3)] for j in range(3)]
+                     for i in range(3)])
+
+
+def _degeneracy(surface: Surface, x: np.ndarray, rank_one: bool) -> float:
+    """How far the singular locus at x is from meeting itself.
+
+    Where two curves of rank-2 type cross, the Hessian's second singular
+    value vanishes.  Along a cuspidal edge the Hessian has rank one and
+    the cubic terms of F on its kernel plane are l^3 (l vanishing on the
+    tangent): where two cuspidal edges cross, that cubic vanishes, so its
+    size there is the measure (it falls as the cube of the distance).
+    """
+    h = surface.hessian(x[None])[0]
+    _, sv, vt = np.linalg.svd(h)
+    if not rank_one:
+        return float(sv[1])
+    k1, k2 = vt[1], vt[2]
+    t = third_derivatives(surface, x)
+    cubic = [np.einsum("ijk,i,j,k->", t, a, b, c) for a, b, c in ((k1, k1, k1), (k1, k1, k2), (k1, k2, k2), (k2, k2, k2))]
+    return float(np.abs(cubic).sum()) ** (1.0 / 3.0)
 
 
 def _principal(points: np.ndarray) -> np.ndarray:
@@ -487,7 +593,12 @@ def _graph(polylines: list, surface: Surface, h: float):
             i = comp[0]
             k = line[i]
             p = polylines[k][0]
-            x = _crossing_point(surface, p, int(local[i]), h)
+            # Line ends that coincide were joined at a point already
+            # placed (_join_lost, or a trace run into an earlier one).
+            placed = [m for m in comp if local[m] in (0, len(polylines[line[m]][0]) - 1)
+                      and not polylines[line[m]][1]]
+            same = [m for m in placed if np.linalg.norm(P[m] - P[placed[0]]) <= 1e-9 * h] if placed else []
+            x = P[same[0]].copy() if len(same) >= 2 else _crossing_point(surface, p, int(local[i]), h)
             # All members within a step of the crossing (on every trace)
             # become that one vertex.
             near = np.nonzero(np.linalg.norm(P - x, axis=1) <= 0.75 * h)[0]
@@ -668,8 +779,18 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
     size = float(np.max(box[:, 1] - box[:, 0]))
     on_box = np.any((np.abs(P - box[:, 0]) <= 1e-9 * size) | (np.abs(P - box[:, 1]) <= 1e-9 * size), axis=1)
     special: dict[int, str] = {}
+    names, sheets, arcs = _near_crossings(g, P, cross[deg[cross] > 2], list(names), sheets.copy(), arcs.copy(),
+                                          2.0 * tol.CURVE_CIRCLE_RADIUS * step)
     for v in cross.tolist():
-        special[v] = "triple point" if deg[v] >= 6 else "crossing of curves"
+        if deg[v] <= 2:
+            continue  # two traces of one curve joined end to end
+        branch = {names[w] for w in g.neighbors(v)}
+        if deg[v] >= 6:
+            special[v] = "triple point"
+        elif branch == {"A2 cuspidal edge"} and _transversal_branches(P, v, list(g.neighbors(v))):
+            special[v] = "crossing of cuspidal edges"
+        else:
+            special[v] = "crossing of curves"
     for v in np.nonzero(deg != 2)[0].tolist():
         if v not in special:
             special[v] = "end on the box" if on_box[v] else ("crossing of curves" if deg[v] > 2 else "end of the trace")
@@ -753,6 +874,39 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
                                     ends=ends, vertices=np.asarray(verts, np.int64)))
     return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
                     special_vertex=np.asarray(sp_vertices, np.int64))
+
+
+def _transversal_branches(P: np.ndarray, v: int, neighbours: list) -> bool:
+    """Whether the edges at v leave in two directions at an angle (two curves crossing).
+
+    Two traces of one curve side by side also make a cluster of vertices
+    of degree four, but their branches are all parallel.
+    """
+    d = P[neighbours] - P[v]
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return bool((np.abs(d @ d[0]) < 0.9).any())
+
+
+def _near_crossings(g: nx.Graph, P: np.ndarray, cross: np.ndarray, names: list, sheets: np.ndarray,
+                    arcs: np.ndarray, radius: float):
+    """Types of the vertices within ``radius`` of a crossing taken from their branch further out.
+
+    The circle that reads the transversal type (:func:`transversal_types`)
+    meets the other curve's sheets near a crossing and reads nonsense
+    there (an "A3 isolated line" where two cuspidal edges cross): each
+    branch has the type of its first vertex beyond ``radius``.
+    """
+    for v in cross.tolist():
+        for w in g.neighbors(v):
+            path, prev, cur = [], v, w
+            while np.linalg.norm(P[cur] - P[v]) < radius and g.degree(cur) == 2:
+                path.append(cur)
+                prev, cur = cur, next(u for u in g.neighbors(cur) if u != prev)
+            if np.linalg.norm(P[cur] - P[v]) < radius:
+                continue  # the branch ends near the crossing: nothing to go by
+            for u in path:
+                names[u], sheets[u], arcs[u] = names[cur], sheets[cur], arcs[cur]
+    return names, sheets, arcs
 
 
 def _walk(g: nx.Graph, a: int, b: int, special: dict, seen: set) -> list[int]:

@@ -113,9 +113,9 @@ def mesh_quiet(text, box, **kw):
         return singmesh.mesh(text, box, **kw)
 
 
-def check_curve_mesh(text, box, components=1, half_sheets=None):
+def check_curve_mesh(text, box, components=1, half_sheets=None, **kw):
     """The independent checks of the module docstring; returns the mesh and its line cells."""
-    m = mesh_quiet(text, box)
+    m = mesh_quiet(text, box, **kw)
     mm = m.to_meshio()
     V = np.asarray(mm.points, float)
     T = np.concatenate([c.data for c in mm.cells if c.type == "triangle"])
@@ -354,3 +354,35 @@ def test_curve_leaving_near_a_box_edge_is_closed():
     # its rail on one face and its end on the other; the strip's cap turns
     # at the box edge (no open edge inside the box).
     check_curve_mesh(float_rotated("x y z", 22), BOX1, 1)
+
+
+# ------------------------------------------------------------------ cuspidal edges crossing
+CRIXXI = "(y^2 + z^2 - 1)^2 + (x^2 + y^2 - 1)^3"
+#: Around (0, 1, 0): F = (a + z^2)^2 + (a + x^2)^3 with a = 2 (y - 1) + (y - 1)^2,
+#: so the cuspidal edges y^2 + z^2 = 1 = x^2 + y^2 (z = +-x) cross there, and
+#: the two half-sheets between them are a lens as thin as the cube of the distance.
+CRIXXI_BOX = ((-0.7, 0.7), (0.3, 1.7), (-0.7, 0.7))
+
+
+@pytest.mark.parametrize("text, point", [
+    (CRIXXI, (0.0, 1.0, 0.0)),
+    # another crossing of cuspidal edges: z = +-x / sqrt(2), same point
+    ("(y^2 + 2 z^2 - 1)^2 + (x^2 + y^2 - 1)^3", (0.0, 1.0, 0.0)),
+])
+def test_cuspidal_edges_crossing(text, point):
+    m, _ = check_curve_mesh(text, CRIXXI_BOX, 1, 2, coarse=16, fine=128)
+    p = np.array(point)
+    # The crossing is found, typed, a vertex, and the four pieces end there.
+    # It is placed to a quarter of a fine cell: (F, grad F) grows only as
+    # the fourth power of the distance along the cylinders' common tangent
+    # plane there, so rounding hides it within about 1e-3.
+    near = [sp for sp in m.special_points if np.linalg.norm(sp.point - p) <= 0.25 * 1.4 / 128]
+    assert len(near) == 1, [sp.describe() for sp in m.special_points]
+    assert near[0].kind == "crossing of cuspidal edges"
+    assert np.linalg.norm(m.vertices[near[0].vertex] - near[0].point) == 0.0
+    i = m.special_points.index(near[0])
+    assert sum(c.ends.count(i) for c in m.singular_curves) == 4
+    assert {c.type for c in m.singular_curves} == {"A2 cuspidal edge"}
+    # No other special point inside the box (the rest are curve ends on it).
+    inner = [sp for sp in m.special_points if sp is not near[0]]
+    assert all(sp.kind == "end on the box" for sp in inner), [sp.describe() for sp in inner]
