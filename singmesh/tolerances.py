@@ -275,6 +275,13 @@ CURVE_CHORD_PLACE = 1e-3
 #: more than a cell apart where they leave the tube.
 CURVE_TANGENT_RADIUS = 10.0
 
+#: The tube's links on the box's faces continue its rails (a half-sheet
+#: that leaves the tube through the box), except within this many cells of
+#: where a curve meets the box: its half-sheets' traces on the face meet
+#: there, and their rails end on the box, joined to the curve's end.  One
+#: cell beyond the tube's radius.
+CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
+
 #: Candidate boxes of the curve search (at its level) in a clump spanning
 #: fewer boxes than this hold isolated points, not a curve.
 CURVE_MIN_CLUMP = 4

@@ -173,14 +173,23 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
     floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
     previous = np.full(k, np.inf)
     stalled = np.zeros(k, np.int64)
+    if across is not None:
+        plane = _normal_plane(np.asarray(across, dtype=float))
     with np.errstate(all="ignore"):
         for _ in range(tol.CURVE_NEWTON):
             f, g, hh = surface.jet(x)
             r = np.concatenate([f[:, None], g], axis=1)
             j = np.concatenate([g[:, None, :], hh], axis=1)
-            step = _least_squares(j, r, floor, drop_smallest=across is None)
-            if across is not None:
-                step -= np.einsum("ki,ki->k", step, across)[:, None] * across
+            if across is None:
+                step = _least_squares(j, r, floor, drop_smallest=True)
+            else:
+                # Least squares in the plane normal to ``across`` itself,
+                # not a 3-d step projected onto it: the 3-d step divides
+                # rounding noise by the Jacobian's small singular value
+                # along the curve, and when ``across`` is a chord a little
+                # off the tangent, the projection keeps part of that
+                # (Newton then stalls at ~1e-7 on 15-digit input).
+                step = np.einsum("kia,ka->ki", plane, _least_squares(j @ plane, r, floor))
             length = np.linalg.norm(step, axis=1, keepdims=True)
             if not np.any(length > tol.CURVE_STOP * h):
                 break  # converged (or stuck) everywhere
@@ -221,6 +230,15 @@ def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bo
         keep[:, -1] = False
     inv = np.where(keep, 1.0 / np.where(keep, sv, 1.0), 0.0)
     return np.einsum("kji,kj,kj->ki", vt, inv, np.einsum("kij,ki->kj", u, r))
+
+
+def _normal_plane(t: np.ndarray) -> np.ndarray:
+    """Orthonormal bases (k, 3, 2) of the planes normal to the directions t (k, 3)."""
+    t = t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    helper = np.where(np.abs(t[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    n1 = np.cross(t, helper)
+    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    return np.stack([n1, np.cross(t, n1)], axis=2)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
