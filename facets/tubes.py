@@ -35,12 +35,14 @@ def balls(curves) -> np.ndarray:
 
 
 def tangent_edges(curves) -> np.ndarray:
-    """Which curve edges lie on a piece whose sheets are tangent (rank-1 type, two sheets or more)."""
-    wide_vertices = np.zeros(len(curves.points), bool)
-    for c in curves.pieces:
-        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
-            wide_vertices[c.vertices] = True
-    return wide_vertices[curves.edges].all(axis=1) if len(curves.edges) else np.zeros(0, bool)
+    """Which curve edges have branches that stay close far out (``CurveSet.wide``: tangent branches)."""
+    wide = np.asarray(getattr(curves, "wide", np.zeros(0, bool)), bool)
+    return wide if len(wide) == len(curves.edges) else np.zeros(len(curves.edges), bool)
+
+
+def tangent_radius(curves) -> float:
+    """The tube's radius (cells) along the wide edges."""
+    return max(float(getattr(curves, "wide_radius", 0.0)), tol.CURVE_TANGENT_RADIUS)
 
 
 def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
@@ -56,13 +58,14 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     return np.concatenate([
         _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
         _block_regions(box, fine_level, curves.points, curves.edges[wide],
-                       pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
+                       pad=tangent_radius(curves) + tol.CURVE_TUBE_GROW + 2),
         np.stack([b - reach, b + reach], axis=1)])
 
 
 def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
     """Which leaves form the tube around the curves of a CurveSet: (N,) bool."""
-    return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves))
+    return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves),
+                        tangent_radius(curves))
 
 
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
@@ -112,15 +115,16 @@ def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, ed
 
 
 def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
-                 balls: np.ndarray | None = None, wide: np.ndarray | None = None) -> np.ndarray:
+                 balls: np.ndarray | None = None, wide: np.ndarray | None = None,
+                 wide_radius: float = tol.CURVE_TANGENT_RADIUS) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets
     meet tangentially and stay close further out) the non-simple leaves
     join up to ``CURVE_BALL_GROW`` cells away.  Along the edges flagged
     ``wide`` (tangent sheets: a tacnode edge, whose sheets part only as
-    the square of the distance) the tube's radius is
-    ``CURVE_TANGENT_RADIUS``, so that the sheets are apart where they leave it.
+    the square of the distance) the tube's radius is ``wide_radius``
+    cells, so that the sheets are apart where they leave it.
 
     Returns
     -------
@@ -134,7 +138,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     half = tree.size / 2.0
     wide = np.zeros(len(edges), bool) if wide is None else np.asarray(wide, bool)
     reach = np.zeros(n, bool)
-    for flag, radius in ((False, tol.CURVE_TUBE_RADIUS), (True, tol.CURVE_TANGENT_RADIUS)):
+    for flag, radius in ((False, tol.CURVE_TUBE_RADIUS), (True, wide_radius)):
         sel = wide == flag
         if not sel.any():
             continue

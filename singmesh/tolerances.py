@@ -282,6 +282,17 @@ CURVE_TANGENT_RADIUS = 10.0
 #: cell beyond the tube's radius.
 CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
 
+#: Across a curve whose branches are tangent (A_k, k >= 3) the tube
+#: reaches where they are this many cells apart (the tacnode's
+#: CURVE_TANGENT_RADIUS is that for x^2 = y^4 at the default cell): one
+#: and a half cells, so that no boundary square holds both.  The distances
+#: tried (cells), the Newton steps onto the polar curve at each, and the
+#: widest tube (cells).
+CURVE_BRANCH_GAP = 1.5
+CURVE_BRANCH_RADII = (2, 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24)
+CURVE_POLAR_NEWTON = 4
+CURVE_TANGENT_MAX = 24.0
+
 #: Candidate boxes of the curve search (at its level) in a clump spanning
 #: fewer boxes than this hold isolated points, not a curve.
 CURVE_MIN_CLUMP = 4

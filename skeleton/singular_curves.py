@@ -127,6 +127,11 @@ class CurveSet:
     pieces: list = field(default_factory=list)
     special: list = field(default_factory=list)
     special_vertex: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: Per edge: its sheets stay within a cell or so of each other further
+    #: out than the tube's usual reach (tangent branches: A_k, k >= 3) ...
+    wide: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    #: ... and the tube's radius (cells) along those edges.
+    wide_radius: float = 0.0
 
     def __len__(self) -> int:
         return len(self.pieces)
@@ -652,7 +657,83 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     P, E, cross = _graph(lines, surface, step)
     T = _tangents(P, E)
     names, sheets, arcs = transversal_types(surface, P, T, tol.CURVE_CIRCLE_RADIUS * step)
-    return _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
+    out = _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
+    return _tube_widths(surface, out, step)
+
+
+def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
+    """Which edges need a wide tube, and its radius: from the branches' separation measured across the curve.
+
+    Across a curve of rank-1 type (A_k, k >= 2) the branches are tangent
+    and part as |v|^((k+1)/2) at distance v along the Hessian's kernel:
+    the tube must reach where they are ``CURVE_BRANCH_GAP`` cells apart
+    (the tacnode's square law gives ``CURVE_TANGENT_RADIUS``, an A4 edge
+    more).  Measured, not read off the type: the coefficients set the
+    scale.
+    """
+    if len(curves.edges) == 0:
+        return curves
+    need = branch_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
+    v_wide = need > tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW
+    for c in curves.pieces:
+        # The tacnode edge (two tangent sheets) is wide however measured.
+        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
+            v_wide[c.vertices] = True
+            need[c.vertices] = np.maximum(need[c.vertices], tol.CURVE_TANGENT_RADIUS)
+    wide = v_wide[curves.edges].all(axis=1)
+    radius = float(np.max(need[curves.edges[wide]], initial=0.0))
+    curves.wide = wide
+    curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
+    return curves
+
+
+def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:
+    """Distance (cells) from each curve point at which its branches are ``CURVE_BRANCH_GAP`` cells apart.
+
+    In the normal plane, with u along the Hessian's larger eigenvector
+    and v along its kernel, the branches at v cross the polar curve
+    G_u = 0 at u*, and are 2 sqrt(-G(u*, v) / a) apart (a = G_uu / 2).
+    0 where the Hessian has rank 2 or 0 (transversal sheets), and
+    ``CURVE_TANGENT_MAX`` where they stay closer than that out to it.
+    """
+    k = len(points)
+    out = np.zeros(k)
+    if k == 0:
+        return out
+    N = _normal_plane(tangents)
+    hn = np.einsum("kia,kij,kjb->kab", N, surface.hessian(points), N)
+    lam, vec = np.linalg.eigh(hn)
+    order = np.argsort(np.abs(lam), axis=1)
+    small = np.take_along_axis(np.abs(lam), order[:, :1], axis=1)[:, 0]
+    big = np.take_along_axis(np.abs(lam), order[:, 1:], axis=1)[:, 0]
+    rank1 = (big > 0) & (small <= tol.CURVE_RANK_RTOL * big)
+    if not rank1.any():
+        return out
+    idx = np.nonzero(rank1)[0]
+    o = order[idx]
+    eu = np.einsum("kia,ka->ki", N[idx], np.take_along_axis(vec[idx], o[:, None, 1:], axis=2)[..., 0])
+    ev = np.einsum("kia,ka->ki", N[idx], np.take_along_axis(vec[idx], o[:, None, :1], axis=2)[..., 0])
+    radii = np.asarray(tol.CURVE_BRANCH_RADII, float)
+    found = np.full(len(idx), np.nan)
+    with np.errstate(all="ignore"):
+        for r in radii:
+            gap = np.zeros(len(idx))
+            for side in (1.0, -1.0):
+                base = points[idx] + side * r * step * ev
+                u = np.zeros(len(idx))
+                for _ in range(tol.CURVE_POLAR_NEWTON):
+                    x = base + u[:, None] * eu
+                    gu = np.einsum("ki,ki->k", surface.gradient(x), eu)
+                    guu = np.einsum("ki,kij,kj->k", eu, surface.hessian(x), eu)
+                    u = u - np.where(guu != 0, gu / guu, 0.0)
+                x = base + u[:, None] * eu
+                a = 0.5 * np.einsum("ki,kij,kj->k", eu, surface.hessian(x), eu)
+                q = -surface(x) / a
+                gap = np.maximum(gap, np.where(np.isfinite(q) & (q > 0), 2.0 * np.sqrt(np.abs(q)), 0.0))
+            hit = np.isnan(found) & (gap >= tol.CURVE_BRANCH_GAP * step)
+            found[hit] = r
+    out[idx] = np.where(np.isnan(found), tol.CURVE_TANGENT_MAX, found)
+    return out
 
 
 def _long_clusters(x: np.ndarray, gap: float, length: float) -> np.ndarray:

@@ -86,11 +86,14 @@ def singular_locus(text: str, box, starts: int = 3000, seed: int = 5) -> np.ndar
     r = np.abs(R(p)).max(axis=1)
     ok = np.isfinite(p).all(axis=1) & (r < 1e-10) & np.all((p >= box[:, 0]) & (p <= box[:, 1]), axis=1)
     p = p[ok]
-    # Curves only: a point with others along a curve near it.
+    # Curves only: a point with others along a curve near it.  Many starts
+    # converge to an isolated singular point (a cone's apex beside the
+    # curve): one sample there, so that it has no others near it.
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    p = np.unique(np.round(p / (1e-6 * size)), axis=0) * (1e-6 * size)
     if len(p) < 3:
         return p[:0]
     tree = cKDTree(p)
-    size = float(np.max(box[:, 1] - box[:, 0]))
     near = np.array([len(tree.query_ball_point(q, 0.05 * size)) for q in p])
     return p[near >= 3]
 
