@@ -55,12 +55,16 @@ CASES = [
     ("cylinder-tangent-plane", "(x^2 + y^2 - 1)(x - 1)", B15, 1),
     ("sphere-plane", "(x^2 + y^2 + z^2 - 1) z", B15, 1),
     ("two-cylinders", "(x^2 + y^2 - 1)(x^2 + z^2 - 1)", B15, 1),
+    ("sphere-cylinder-tangent", "(x^2 + y^2 + z^2 - 1)(x^2 + y^2 - 1)", B15, 1),   # a tacnode circle
     # classical surfaces
     ("whitney", "x^2 - y^2 z", B1, 1),
     ("crosscap", "4 x^2 (x^2 + y^2 + z^2 + z) + y^2 (y^2 + z^2 - 1)", ((-1.2, 1.2),) * 3, 1),
     ("roman", "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z", B1, 1),
     ("pluecker", "(x^2 + y^2) z - 2 x y", ((-1.3, 1.3),) * 3, 1),
     ("three-planes", "x y z", B1, 1),
+    ("cayley-ruled", "x y - y^3 - x^2 z", B1, 1),     # Cayley's ruled cubic, double along the z-axis
+    # discriminant of t^4 + x t^2 + y t + z: two cuspidal edges and a double curve from the swallowtail point
+    ("swallowtail", "16 x^4 z - 4 x^3 y^2 - 128 x^2 z^2 + 144 x y^2 z - 27 y^4 + 256 z^3", B1, 1),
 ]
 
 

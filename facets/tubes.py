@@ -196,30 +196,30 @@ def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = No
     nodes, inv = np.unique(np.concatenate([src, dst]), return_inverse=True)
     a, b = inv[: len(src)], inv[len(src):]
     m = len(nodes)
-    nxt = np.full(m, -1, np.int64)
-    nxt[a] = b
     indeg = np.bincount(b, minlength=m)
     outdeg = np.bincount(a, minlength=m)
-    used = np.zeros(m, bool)
+    # Every link in exactly one trail: an event where two rails touch (two
+    # links out of it) continues one and starts the other, and a trail
+    # that runs into an earlier one keeps its last link (no gap).
+    order = np.argsort(a, kind="stable")
+    first_out = np.concatenate([[0], np.cumsum(outdeg)])
+    left = outdeg.copy()
     out = []
-    starts = np.nonzero((outdeg > 0) & (indeg == 0))[0].tolist()
+    starts = np.nonzero(outdeg > indeg)[0].tolist()
     for first in starts + np.nonzero(outdeg > 0)[0].tolist():
-        if used[first]:
-            continue
-        path = [first]
-        used[first] = True
-        cur = first
-        closed = False
-        while nxt[cur] >= 0:
-            cur = int(nxt[cur])
-            if cur == first:
-                closed = True
-                break
-            if used[cur]:
-                break
-            used[cur] = True
-            path.append(cur)
-        if len(path) >= 2 or closed:
+        while left[first] > 0:
+            path = [first]
+            cur = first
+            while left[cur] > 0:
+                link = order[first_out[cur] + outdeg[cur] - left[cur]]
+                left[cur] -= 1
+                cur = int(b[link])
+                path.append(cur)
+                if cur == first:
+                    break
+            closed = path[-1] == path[0]
+            if closed:
+                path = path[:-1]
             out.append((nodes[np.array(path)], closed))
     return out
 
