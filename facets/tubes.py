@@ -79,8 +79,10 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     on_box = _faces_of(curves.points, box).any(axis=1)
     far = np.ones(len(events.point), bool)
     if on_box.any():
-        far = cKDTree(curves.points[on_box]).query(
-            events.point, distance_upper_bound=tol.CURVE_FACE_RAIL * cell)[0] > tol.CURVE_FACE_RAIL * cell
+        # The whole tube's reach there (wider along tangent branches).
+        radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
+        keep_off = (radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL) * cell
+        far = cKDTree(curves.points[on_box]).query(events.point, distance_upper_bound=keep_off)[0] > keep_off
     return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box)
