@@ -669,17 +669,23 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     the tube must reach where they are ``CURVE_BRANCH_GAP`` cells apart
     (the tacnode's square law gives ``CURVE_TANGENT_RADIUS``, an A4 edge
     more).  Measured, not read off the type: the coefficients set the
-    scale.
+    scale.  Pieces that need no more than the tacnode's tube keep the
+    tube they had (a cuspidal edge: the usual one).
     """
     if len(curves.edges) == 0:
         return curves
-    need = branch_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
-    v_wide = need > tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW
+    reach = branch_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
+    v_wide = np.zeros(len(curves.points), bool)
+    need = np.zeros(len(curves.points))
     for c in curves.pieces:
-        # The tacnode edge (two tangent sheets) is wide however measured.
-        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
+        # A piece as a whole: its median (where a cusp degenerates at a
+        # special point, the balls around it widen the tube).  The tacnode
+        # edge (two tangent sheets) is wide however measured.
+        r = float(np.median(reach[c.vertices]))
+        tacnode = c.sheets >= 2 and not c.type.startswith(("A1", "D4"))
+        if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
             v_wide[c.vertices] = True
-            need[c.vertices] = np.maximum(need[c.vertices], tol.CURVE_TANGENT_RADIUS)
+            need[c.vertices] = max(r, tol.CURVE_TANGENT_RADIUS) if tacnode else r
     wide = v_wide[curves.edges].all(axis=1)
     radius = float(np.max(need[curves.edges[wide]], initial=0.0))
     curves.wide = wide
@@ -693,8 +699,9 @@ def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, ste
     In the normal plane, with u along the Hessian's larger eigenvector
     and v along its kernel, the branches at v cross the polar curve
     G_u = 0 at u*, and are 2 sqrt(-G(u*, v) / a) apart (a = G_uu / 2).
-    0 where the Hessian has rank 2 or 0 (transversal sheets), and
-    ``CURVE_TANGENT_MAX`` where they stay closer than that out to it.
+    0 where the Hessian has rank 2 or 0 (transversal sheets) or there
+    are no real branches (an isolated line), and ``CURVE_TANGENT_MAX``
+    where they stay closer than that out to it.
     """
     k = len(points)
     out = np.zeros(k)
@@ -715,6 +722,7 @@ def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, ste
     ev = np.einsum("kia,ka->ki", N[idx], np.take_along_axis(vec[idx], o[:, None, :1], axis=2)[..., 0])
     radii = np.asarray(tol.CURVE_BRANCH_RADII, float)
     found = np.full(len(idx), np.nan)
+    real = np.zeros(len(idx), bool)   # branches seen at all (not an isolated line)
     with np.errstate(all="ignore"):
         for r in radii:
             gap = np.zeros(len(idx))
@@ -732,7 +740,8 @@ def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, ste
                 gap = np.maximum(gap, np.where(np.isfinite(q) & (q > 0), 2.0 * np.sqrt(np.abs(q)), 0.0))
             hit = np.isnan(found) & (gap >= tol.CURVE_BRANCH_GAP * step)
             found[hit] = r
-    out[idx] = np.where(np.isnan(found), tol.CURVE_TANGENT_MAX, found)
+            real |= gap > 0
+    out[idx] = np.where(np.isnan(found), np.where(real, tol.CURVE_TANGENT_MAX, 0.0), found)
     return out
 
 
