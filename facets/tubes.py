@@ -43,12 +43,14 @@ def balls(curves, kinds=BALL_KINDS) -> np.ndarray:
 
 
 def tangent_edges(curves) -> np.ndarray:
-    """Which curve edges lie on a piece whose sheets are tangent (rank-1 type, two sheets or more)."""
-    wide_vertices = np.zeros(len(curves.points), bool)
-    for c in curves.pieces:
-        if c.sheets >= 2 and not c.type.startswith(("A1", "D4")):
-            wide_vertices[c.vertices] = True
-    return wide_vertices[curves.edges].all(axis=1) if len(curves.edges) else np.zeros(0, bool)
+    """Which curve edges have branches that stay close far out (``CurveSet.wide``: tangent branches)."""
+    wide = np.asarray(getattr(curves, "wide", np.zeros(0, bool)), bool)
+    return wide if len(wide) == len(curves.edges) else np.zeros(len(curves.edges), bool)
+
+
+def tangent_radius(curves) -> float:
+    """The tube's radius (cells) along the wide edges."""
+    return max(float(getattr(curves, "wide_radius", 0.0)), tol.CURVE_TANGENT_RADIUS)
 
 
 def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
@@ -66,21 +68,32 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     return np.concatenate([
         _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
         _block_regions(box, fine_level, curves.points, curves.edges[wide],
-                       pad=tol.CURVE_TANGENT_RADIUS + tol.CURVE_TUBE_GROW + 2),
+                       pad=tangent_radius(curves) + tol.CURVE_TUBE_GROW + 2),
         np.stack([b - reach, b + reach], axis=1), np.stack([m - meet_reach, m + meet_reach], axis=1)])
 
 
 def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
     """Which leaves form the tube around the curves of a CurveSet: (N,) bool."""
     return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves),
-                        balls(curves, MEET_KINDS))
+                        tangent_radius(curves), balls(curves, MEET_KINDS))
 
 
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
     """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``."""
     ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)
                      if sp.kind == "end on the box"], np.int64)
-    return strip_triangles(rails(grouped, links, tube_id), events.point, events.key, curves.points,
+    # The tube's links on the box's faces continue the rails where a
+    # half-sheet leaves the tube through the box rather than through its
+    # side (a curve running a few cells inside a face): away from where
+    # the curves meet the box, whose half-sheets end on the box (below).
+    on_box = _faces_of(curves.points, box).any(axis=1)
+    far = np.ones(len(events.point), bool)
+    if on_box.any():
+        # The whole tube's reach there (wider along tangent branches).
+        radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
+        keep_off = (radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL) * cell
+        far = cKDTree(curves.points[on_box]).query(events.point, distance_upper_bound=keep_off)[0] > keep_off
+    return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box)
 
@@ -115,15 +128,15 @@ def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, ed
 
 def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
                  balls: np.ndarray | None = None, wide: np.ndarray | None = None,
-                 meets: np.ndarray | None = None) -> np.ndarray:
+                 wide_radius: float = tol.CURVE_TANGENT_RADIUS, meets: np.ndarray | None = None) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets
     meet tangentially and stay close further out) the non-simple leaves
     join up to ``CURVE_BALL_GROW`` cells away.  Along the edges flagged
     ``wide`` (tangent sheets: a tacnode edge, whose sheets part only as
-    the square of the distance) the tube's radius is
-    ``CURVE_TANGENT_RADIUS``, so that the sheets are apart where they leave it.
+    the square of the distance) the tube's radius is ``wide_radius``
+    cells, so that the sheets are apart where they leave it.
     Around the points ``meets`` (cuspidal edges crossing) every leaf within
     ``CURVE_MEET_BALL`` cells is tube.
 
@@ -139,7 +152,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     half = tree.size / 2.0
     wide = np.zeros(len(edges), bool) if wide is None else np.asarray(wide, bool)
     reach = np.zeros(n, bool)
-    for flag, radius in ((False, tol.CURVE_TUBE_RADIUS), (True, tol.CURVE_TANGENT_RADIUS)):
+    for flag, radius in ((False, tol.CURVE_TUBE_RADIUS), (True, wide_radius)):
         sel = wide == flag
         if not sel.any():
             continue
@@ -171,7 +184,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     return inside
 
 
-def rails(box_links_arrays, links, tube_id: int) -> list[tuple[np.ndarray, bool]]:
+def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = None) -> list[tuple[np.ndarray, bool]]:
     """The tube's rails: paths of the links on its boundary inside the domain.
 
     Parameters
@@ -180,43 +193,51 @@ def rails(box_links_arrays, links, tube_id: int) -> list[tuple[np.ndarray, bool]
         :func:`singmesh.facets.cycles.box_links` with the tube grouped
     links : FaceLinks
     tube_id : int
+    face_ok : (E,) bool, optional
+        Events a link on the domain's boundary may join: such a link
+        whose two events are flagged belongs to the rails too, unless its
+        square was paired along its boundary (no graph axis: two sheets
+        may be joined there).
 
     Returns
     -------
     list of (events (k,) int64, closed)
     """
     box, src, dst, sq = box_links_arrays
-    mine = (box == tube_id) & (links.minus[sq] >= 0) & (links.plus[sq] >= 0)
+    inner = (links.minus[sq] >= 0) & (links.plus[sq] >= 0)
+    if face_ok is not None:
+        inner |= face_ok[src] & face_ok[dst] & ~links.ambiguous[sq] & ~links.inconsistent[sq]
+    mine = (box == tube_id) & inner
     src, dst = src[mine], dst[mine]
     if len(src) == 0:
         return []
     nodes, inv = np.unique(np.concatenate([src, dst]), return_inverse=True)
     a, b = inv[: len(src)], inv[len(src):]
     m = len(nodes)
-    nxt = np.full(m, -1, np.int64)
-    nxt[a] = b
     indeg = np.bincount(b, minlength=m)
     outdeg = np.bincount(a, minlength=m)
-    used = np.zeros(m, bool)
+    # Every link in exactly one trail: an event where two rails touch (two
+    # links out of it) continues one and starts the other, and a trail
+    # that runs into an earlier one keeps its last link (no gap).
+    order = np.argsort(a, kind="stable")
+    first_out = np.concatenate([[0], np.cumsum(outdeg)])
+    left = outdeg.copy()
     out = []
-    starts = np.nonzero((outdeg > 0) & (indeg == 0))[0].tolist()
+    starts = np.nonzero(outdeg > indeg)[0].tolist()
     for first in starts + np.nonzero(outdeg > 0)[0].tolist():
-        if used[first]:
-            continue
-        path = [first]
-        used[first] = True
-        cur = first
-        closed = False
-        while nxt[cur] >= 0:
-            cur = int(nxt[cur])
-            if cur == first:
-                closed = True
-                break
-            if used[cur]:
-                break
-            used[cur] = True
-            path.append(cur)
-        if len(path) >= 2 or closed:
+        while left[first] > 0:
+            path = [first]
+            cur = first
+            while left[cur] > 0:
+                link = order[first_out[cur] + outdeg[cur] - left[cur]]
+                left[cur] -= 1
+                cur = int(b[link])
+                path.append(cur)
+                if cur == first:
+                    break
+            closed = path[-1] == path[0]
+            if closed:
+                path = path[:-1]
             out.append((nodes[np.array(path)], closed))
     return out
 
@@ -252,6 +273,8 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     g.add_weighted_edges_from(zip(curve_edges[:, 0].tolist(), curve_edges[:, 1].tolist(), d.tolist()))
     tree = cKDTree(curve_points)
     end_tree = cKDTree(curve_points[box_ends]) if len(box_ends) else None
+    if box is not None:
+        rail_list = _chain_on_faces(rail_list, event_points, curve_points[box_ends], reach, box)
     tris: list[tuple] = []  # (vertex, vertex, vertex); vertex = ("e", event) or ("c", curve vertex)
 
     def walk(u: int, v: int) -> list[int]:
@@ -320,6 +343,71 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     # made twice is kept once; one whose corners coincide is dropped.
     good = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2]) & (keys[:, 0] != keys[:, 2])
     return keys[good], pts[good]
+
+
+def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach: float, box: np.ndarray):
+    """Rails that end on a face of the box away from the curves' ends, joined end to start across it.
+
+    A half-sheet that leaves the tube through the box near a curve that
+    stays inside it (a few cells or less from a face) comes back onto the
+    tube's side further on: its trace on the face between, in squares
+    that hold two sheets, is not a rail.  Each such rail end is joined to
+    the nearest such rail start on the same face (the chord between them
+    lies in the face: an edge on the box), and the two rails become one
+    (closed when it is the rail's own start).
+    """
+    open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
+    if not open_:
+        return rail_list
+
+    def free(p):
+        if not _on_boundary(p, box):
+            return False
+        return len(ends) == 0 or float(np.linalg.norm(ends - p, axis=1).min()) > reach
+
+    heads = [k for k in open_ if free(event_points[rail_list[k][0][0]])]
+    tails = [k for k in open_ if free(event_points[rail_list[k][0][-1]])]
+    if not heads or not tails:
+        return rail_list
+    # Nearest pairs first (distances are distinct in general position;
+    # ties by index, so the same input gives the same rails).
+    pairs = []
+    for a in tails:
+        pa = event_points[rail_list[a][0][-1]]
+        for b in heads:
+            pb = event_points[rail_list[b][0][0]]
+            if (_faces_of(pa, box) & _faces_of(pb, box)).any():
+                d = float(np.linalg.norm(pa - pb))
+                if d <= reach:
+                    pairs.append((d, a, b))
+    nxt: dict[int, int] = {}
+    taken = set()
+    for _, a, b in sorted(pairs):
+        if a not in nxt and b not in taken:
+            nxt[a] = b
+            taken.add(b)
+    if not nxt:
+        return rail_list
+    out = [rail_list[k] for k in range(len(rail_list)) if k not in nxt and k not in taken]
+    done = set()
+    for k in sorted(set(nxt) | taken):
+        if k in done:
+            continue
+        # Walk back to the first rail of the chain (or once round a loop).
+        first = k
+        prev = {b: a for a, b in nxt.items()}
+        while first in prev and prev[first] != k:
+            first = prev[first]
+        chain, cur = [], first
+        while cur not in done:
+            done.add(cur)
+            chain.append(cur)
+            if cur not in nxt:
+                break
+            cur = nxt[cur]
+        closed = chain[-1] in nxt and nxt[chain[-1]] == chain[0]
+        out.append((np.concatenate([rail_list[c][0] for c in chain]), closed))
+    return out
 
 
 def _on_boundary(p: np.ndarray, box: np.ndarray) -> bool:

@@ -287,6 +287,24 @@ CURVE_CHORD_PLACE = 1e-3
 #: more than a cell apart where they leave the tube.
 CURVE_TANGENT_RADIUS = 10.0
 
+#: The tube's links on the box's faces continue its rails (a half-sheet
+#: that leaves the tube through the box), except where a curve meets the
+#: box: its half-sheets' traces on the face meet there, and their rails
+#: end on the box, joined to the curve's end.  "There" is the tube's reach
+#: (radius and growth) and this many cells more.
+CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
+
+#: Across a curve whose branches are tangent (A_k, k >= 3) the tube
+#: reaches where they are this many cells apart (the tacnode's
+#: CURVE_TANGENT_RADIUS is that for x^2 = y^4 at the default cell): one
+#: and a half cells, so that no boundary square holds both.  The distances
+#: tried (cells), the Newton steps onto the polar curve at each, and the
+#: widest tube (cells).
+CURVE_BRANCH_GAP = 1.5
+CURVE_BRANCH_RADII = (2, 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24)
+CURVE_POLAR_NEWTON = 4
+CURVE_TANGENT_MAX = 24.0
+
 #: Candidate boxes of the curve search (at its level) in a clump spanning
 #: fewer boxes than this hold isolated points, not a curve.
 CURVE_MIN_CLUMP = 4

@@ -127,6 +127,11 @@ class CurveSet:
     pieces: list = field(default_factory=list)
     special: list = field(default_factory=list)
     special_vertex: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: Per edge: its sheets stay within a cell or so of each other further
+    #: out than the tube's usual reach (tangent branches: A_k, k >= 3) ...
+    wide: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    #: ... and the tube's radius (cells) along those edges.
+    wide_radius: float = 0.0
 
     def __len__(self) -> int:
         return len(self.pieces)
@@ -173,14 +178,23 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
     floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
     previous = np.full(k, np.inf)
     stalled = np.zeros(k, np.int64)
+    if across is not None:
+        plane = _normal_plane(np.asarray(across, dtype=float))
     with np.errstate(all="ignore"):
         for _ in range(tol.CURVE_NEWTON):
             f, g, hh = surface.jet(x)
             r = np.concatenate([f[:, None], g], axis=1)
             j = np.concatenate([g[:, None, :], hh], axis=1)
-            step = _least_squares(j, r, floor, drop_smallest=across is None)
-            if across is not None:
-                step -= np.einsum("ki,ki->k", step, across)[:, None] * across
+            if across is None:
+                step = _least_squares(j, r, floor, drop_smallest=True)
+            else:
+                # Least squares in the plane normal to ``across`` itself,
+                # not a 3-d step projected onto it: the 3-d step divides
+                # rounding noise by the Jacobian's small singular value
+                # along the curve, and when ``across`` is a chord a little
+                # off the tangent, the projection keeps part of that
+                # (Newton then stalls at ~1e-7 on 15-digit input).
+                step = np.einsum("kia,ka->ki", plane, _least_squares(j @ plane, r, floor))
             length = np.linalg.norm(step, axis=1, keepdims=True)
             if not np.any(length > tol.CURVE_STOP * h):
                 break  # converged (or stuck) everywhere
@@ -221,6 +235,15 @@ def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bo
         keep[:, -1] = False
     inv = np.where(keep, 1.0 / np.where(keep, sv, 1.0), 0.0)
     return np.einsum("kji,kj,kj->ki", vt, inv, np.einsum("kij,ki->kj", u, r))
+
+
+def _normal_plane(t: np.ndarray) -> np.ndarray:
+    """Orthonormal bases (k, 3, 2) of the planes normal to the directions t (k, 3)."""
+    t = t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    helper = np.where(np.abs(t[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    n1 = np.cross(t, helper)
+    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    return np.stack([n1, np.cross(t, n1)], axis=2)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -527,28 +550,28 @@ def _second_singular_value(surface: Surface, x: np.ndarray) -> np.ndarray:
 
 
 def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.ndarray:
-    """Where the Hessian's second singular value vanishes along polyline ``p`` near vertex i."""
+    """Where two curves cross along polyline ``p`` near vertex i.
+
+    On double curves, where the Hessian's second singular value vanishes;
+    on cuspidal edges (Hessian of rank one all along, so that measure is
+    flat) where :func:`_degeneracy`, the kernel cubic, does.
+    """
     a, b = p[max(i - 2, 0)], p[min(i + 2, len(p) - 1)]
     t = _unit(b - a)
+    # Read off the curve beside the crossing (at it the rank drops anyway).
+    rank1 = _rank_one(surface, np.stack([a, b]))
 
     def point(s):
         z, _ = _correct(surface, (p[i] + s * t)[None], t[None], 2 * h)
         return z[0]
 
-    lo, hi = -2.0 * h, 2.0 * h
-    g = (np.sqrt(5.0) - 1) / 2
-    c, d = hi - g * (hi - lo), lo + g * (hi - lo)
-    fc, fd = _second_singular_value(surface, point(c)), _second_singular_value(surface, point(d))
-    for _ in range(tol.CURVE_CROSSING_STEPS):
-        if fc <= fd:
-            hi, d, fd = d, c, fc
-            c = hi - g * (hi - lo)
-            fc = _second_singular_value(surface, point(c))
-        else:
-            lo, c, fc = c, d, fd
-            d = lo + g * (hi - lo)
-            fd = _second_singular_value(surface, point(d))
-    return point((lo + hi) / 2)
+    def measure(s):
+        y = point(s)
+        if not np.isfinite(y).all():
+            return np.inf
+        return _degeneracy(surface, y, True) if rank1 else _second_singular_value(surface, y)
+
+    return point(_golden(measure, -2.0 * h, 2.0 * h, tol.CURVE_CROSSING_STEPS))
 
 
 def _graph(polylines: list, surface: Surface, h: float):
@@ -745,7 +768,92 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     P, E, cross = _graph(lines, surface, step)
     T = _tangents(P, E)
     names, sheets, arcs = transversal_types(surface, P, T, tol.CURVE_CIRCLE_RADIUS * step)
-    return _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
+    out = _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
+    return _tube_widths(surface, out, step)
+
+
+def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
+    """Which edges need a wide tube, and its radius: from the branches' separation measured across the curve.
+
+    Across a curve of rank-1 type (A_k, k >= 2) the branches are tangent
+    and part as |v|^((k+1)/2) at distance v along the Hessian's kernel:
+    the tube must reach where they are ``CURVE_BRANCH_GAP`` cells apart
+    (the tacnode's square law gives ``CURVE_TANGENT_RADIUS``, an A4 edge
+    more).  Measured, not read off the type: the coefficients set the
+    scale.  Pieces that need no more than the tacnode's tube keep the
+    tube they had (a cuspidal edge: the usual one).
+    """
+    if len(curves.edges) == 0:
+        return curves
+    reach = branch_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
+    v_wide = np.zeros(len(curves.points), bool)
+    need = np.zeros(len(curves.points))
+    for c in curves.pieces:
+        # A piece as a whole: its median (where a cusp degenerates at a
+        # special point, the balls around it widen the tube).  The tacnode
+        # edge (two tangent sheets) is wide however measured.
+        r = float(np.median(reach[c.vertices]))
+        tacnode = c.sheets >= 2 and not c.type.startswith(("A1", "D4"))
+        if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
+            v_wide[c.vertices] = True
+            need[c.vertices] = max(r, tol.CURVE_TANGENT_RADIUS) if tacnode else r
+    wide = v_wide[curves.edges].all(axis=1)
+    radius = float(np.max(need[curves.edges[wide]], initial=0.0))
+    curves.wide = wide
+    curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
+    return curves
+
+
+def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:
+    """Distance (cells) from each curve point at which its branches are ``CURVE_BRANCH_GAP`` cells apart.
+
+    In the normal plane, with u along the Hessian's larger eigenvector
+    and v along its kernel, the branches at v cross the polar curve
+    G_u = 0 at u*, and are 2 sqrt(-G(u*, v) / a) apart (a = G_uu / 2).
+    0 where the Hessian has rank 2 or 0 (transversal sheets) or there
+    are no real branches (an isolated line), and ``CURVE_TANGENT_MAX``
+    where they stay closer than that out to it.
+    """
+    k = len(points)
+    out = np.zeros(k)
+    if k == 0:
+        return out
+    N = _normal_plane(tangents)
+    hn = np.einsum("kia,kij,kjb->kab", N, surface.hessian(points), N)
+    lam, vec = np.linalg.eigh(hn)
+    order = np.argsort(np.abs(lam), axis=1)
+    small = np.take_along_axis(np.abs(lam), order[:, :1], axis=1)[:, 0]
+    big = np.take_along_axis(np.abs(lam), order[:, 1:], axis=1)[:, 0]
+    rank1 = (big > 0) & (small <= tol.CURVE_RANK_RTOL * big)
+    if not rank1.any():
+        return out
+    idx = np.nonzero(rank1)[0]
+    o = order[idx]
+    eu = np.einsum("kia,ka->ki", N[idx], np.take_along_axis(vec[idx], o[:, None, 1:], axis=2)[..., 0])
+    ev = np.einsum("kia,ka->ki", N[idx], np.take_along_axis(vec[idx], o[:, None, :1], axis=2)[..., 0])
+    radii = np.asarray(tol.CURVE_BRANCH_RADII, float)
+    found = np.full(len(idx), np.nan)
+    real = np.zeros(len(idx), bool)   # branches seen at all (not an isolated line)
+    with np.errstate(all="ignore"):
+        for r in radii:
+            gap = np.zeros(len(idx))
+            for side in (1.0, -1.0):
+                base = points[idx] + side * r * step * ev
+                u = np.zeros(len(idx))
+                for _ in range(tol.CURVE_POLAR_NEWTON):
+                    x = base + u[:, None] * eu
+                    gu = np.einsum("ki,ki->k", surface.gradient(x), eu)
+                    guu = np.einsum("ki,kij,kj->k", eu, surface.hessian(x), eu)
+                    u = u - np.where(guu != 0, gu / guu, 0.0)
+                x = base + u[:, None] * eu
+                a = 0.5 * np.einsum("ki,kij,kj->k", eu, surface.hessian(x), eu)
+                q = -surface(x) / a
+                gap = np.maximum(gap, np.where(np.isfinite(q) & (q > 0), 2.0 * np.sqrt(np.abs(q)), 0.0))
+            hit = np.isnan(found) & (gap >= tol.CURVE_BRANCH_GAP * step)
+            found[hit] = r
+            real |= gap > 0
+    out[idx] = np.where(np.isnan(found), np.where(real, tol.CURVE_TANGENT_MAX, 0.0), found)
+    return out
 
 
 def _long_clusters(x: np.ndarray, gap: float, length: float) -> np.ndarray:
