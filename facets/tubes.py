@@ -44,13 +44,13 @@ def balls(curves, kinds=BALL_KINDS) -> np.ndarray:
 
 def tangent_edges(curves) -> np.ndarray:
     """Which curve edges have branches that stay close far out (``CurveSet.wide``: tangent branches)."""
-    wide = np.asarray(getattr(curves, "wide", np.zeros(0, bool)), bool)
-    return wide if len(wide) == len(curves.edges) else np.zeros(len(curves.edges), bool)
+    # An empty CurveSet has no flags (and no edges).
+    return curves.wide if len(curves.wide) == len(curves.edges) else np.zeros(len(curves.edges), bool)
 
 
 def tangent_radius(curves) -> float:
     """The tube's radius (cells) along the wide edges."""
-    return max(float(getattr(curves, "wide_radius", 0.0)), tol.CURVE_TANGENT_RADIUS)
+    return max(float(curves.wide_radius), tol.CURVE_TANGENT_RADIUS)
 
 
 def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
