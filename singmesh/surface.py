@@ -16,6 +16,7 @@ and evaluates all of them at points.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -50,6 +51,22 @@ def _powers(values: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
+def _rows(p: np.ndarray) -> np.ndarray:
+    """Points as (K, 3) rows, a single point doubled.
+
+    BLAS multiplies one row by a matrix (gemv) in another order than
+    several (gemm), which changes the last bits: doubled, a point gets the
+    same value alone as in any batch, so that work done for many points
+    at once gives what it gives point by point.
+    """
+    p = p.reshape(-1, 3)
+    return np.concatenate([p, p]) if len(p) == 1 else p
+
+
+def _count(shape: tuple) -> int:
+    return math.prod(shape)
+
+
 def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Evaluate the polynomial with monomial tensor ``coeffs`` at ``points``.
 
@@ -63,16 +80,30 @@ def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     -------
     values : (...) ndarray
     """
+    return evaluate_tensors([coeffs], points)[0]
+
+
+def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
+    """:func:`evaluate_tensor` for several tensors of one shape at the same points.
+
+    The powers of the coordinates are formed once for all of them; each
+    value is computed exactly as :func:`evaluate_tensor` computes it alone.
+    """
     p = np.asarray(points, dtype=float)
-    nx, ny, nz = coeffs.shape
+    nx, ny, nz = tensors[0].shape
     shape = p.shape[:-1]
-    p = p.reshape(-1, 3)
-    # Contract one variable at a time (a matrix product, then two
-    # row-wise sums): einsum with '...' does not optimise the four-way product.
-    t = _powers(p[:, 0], nx) @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
-    # Batched matrix products (BLAS), not einsum's slow generic loop.
-    t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
-    return np.einsum("kl,kl->k", t, _powers(p[:, 2], nz)).reshape(shape)
+    count = _count(shape)
+    p = _rows(p)
+    px, py, pz = _powers(p[:, 0], nx), _powers(p[:, 1], ny)[:, None, :], _powers(p[:, 2], nz)
+    out = []
+    for coeffs in tensors:
+        # Contract one variable at a time (a matrix product, then two
+        # row-wise sums): einsum with '...' does not optimise the four-way product.
+        t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
+        # Batched matrix products (BLAS), not einsum's slow generic loop.
+        t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
+        out.append(np.einsum("kl,kl->k", t, pz)[:count].reshape(shape))
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,14 +251,14 @@ class Surface:
         """
         p = np.asarray(points, dtype=float)
         shape = p.shape[:-1]
-        p = p.reshape(-1, 3)
+        p = _rows(p)
         c = self.jet_coeffs
         m, nx, ny, nz = c.shape
         # One variable at a time, as matrix products (BLAS): x against the
         # (x; y, component, z) table, then y and z row by row.
         t = _powers(p[:, 0], nx) @ c.transpose(1, 2, 0, 3).reshape(nx, -1)  # (K, ny*m*nz)
         t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, m * nz))  # (K, 1, m*nz)
-        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:, :, 0]  # (K, m)
+        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:_count(shape), :, 0]  # (K, m)
         f = v[:, 0].reshape(shape)
         g = v[:, 1:4].reshape(shape + (3,))
         h = v[:, [4, 5, 6, 5, 7, 8, 6, 8, 9]].reshape(shape + (3, 3))
@@ -239,12 +270,18 @@ class Surface:
 
     def gradient(self, points) -> np.ndarray:
         """grad F at ``points`` (..., 3), shape (..., 3)."""
-        return np.stack([evaluate_tensor(g, points) for g in self.gradient_coeffs], axis=-1)
+        return np.stack(evaluate_tensors(self.gradient_coeffs, points), axis=-1)
+
+    def value_gradient(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """F and grad F at ``points`` (..., 3): the values of ``self(points)`` and ``self.gradient(points)``."""
+        f, *g = evaluate_tensors([self.coeffs, *self.gradient_coeffs], points)
+        return f, np.stack(g, axis=-1)
 
     def hessian(self, points) -> np.ndarray:
         """Hessian of F at ``points`` (..., 3), shape (..., 3, 3)."""
         h = self.hessian_coeffs
-        rows = [np.stack([evaluate_tensor(h[a][b], points) for b in range(3)], -1) for a in range(3)]
+        v = evaluate_tensors([h[a][b] for a in range(3) for b in range(3)], points)
+        rows = [np.stack(v[3 * a:3 * a + 3], -1) for a in range(3)]
         return np.stack(rows, axis=-2)
 
     def magnitude(self, points) -> np.ndarray:

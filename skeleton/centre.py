@@ -108,8 +108,8 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
 
 def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
     """max(|F|, |grad F|) relative to the size of F's terms at x."""
-    f = np.abs(surface(x))
-    g = np.abs(surface.gradient(x)).max(axis=-1)
+    f, g = surface.value_gradient(x)
+    f, g = np.abs(f), np.abs(g).max(axis=-1)
     scale = np.maximum(surface.magnitude(x), np.abs(surface.coeffs).max())
     return np.maximum(f, g) / scale
 
