@@ -165,24 +165,35 @@ def _limit(surface: Surface) -> float:
 
 
 # ---------------------------------------------------------------- tracing
-def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
+def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool = False):
     """Newton from points q (k, 3) onto the curve, steps orthogonal to ``across`` (k, 3).
 
     Across a cuspidal or tacnode edge the root is multiple and Newton only
     halves (or takes 2/3 of) the distance per step; each step is therefore
     also tried two and three times as long, and the best kept (the
     multiplicity's step), which restores fast convergence.
+
+    ``h`` is one length or one per point.  With ``each`` every point stops
+    on its own (as if corrected alone: many independent searches run at
+    once give what they give one by one); otherwise all step until all
+    have converged.
     """
     x = np.array(q, dtype=float)
     k = len(x)
+    hk = np.broadcast_to(np.asarray(h, dtype=float), (k,))
     floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
     previous = np.full(k, np.inf)
     stalled = np.zeros(k, np.int64)
     if across is not None:
         plane = _normal_plane(np.asarray(across, dtype=float))
+    live = np.arange(k)
+    # Without a direction held fixed, longer steps could slide along the
+    # curve: plain steps then.
+    factors = np.array([1.0, 2.0, 3.0]) if across is not None else np.ones(1)
     with np.errstate(all="ignore"):
         for _ in range(tol.CURVE_NEWTON):
-            f, g, hh = surface.jet(x)
+            xs = x[live]
+            f, g, hh = surface.jet(xs)
             r = np.concatenate([f[:, None], g], axis=1)
             j = np.concatenate([g[:, None, :], hh], axis=1)
             if across is None:
@@ -194,27 +205,36 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
                 # along the curve, and when ``across`` is a chord a little
                 # off the tangent, the projection keeps part of that
                 # (Newton then stalls at ~1e-7 on 15-digit input).
-                step = np.einsum("kia,ka->ki", plane, _least_squares(j @ plane, r, floor))
+                pl = plane[live]
+                step = np.einsum("kia,ka->ki", pl, _least_squares(j @ pl, r, floor))
             length = np.linalg.norm(step, axis=1, keepdims=True)
-            if not np.any(length > tol.CURVE_STOP * h):
+            moving = length[:, 0] > tol.CURVE_STOP * hk[live]
+            if each:
+                # Converged (or stuck) points stop here, the others step.
+                live, xs, step, length = live[moving], xs[moving], step[moving], length[moving]
+                if not len(live):
+                    break
+            elif not np.any(moving):
                 break  # converged (or stuck) everywhere
-            step *= np.minimum(1.0, 0.5 * h / np.maximum(length, 1e-300))
-            # Without a direction held fixed, longer steps could slide
-            # along the curve: plain steps then.
-            factors = np.array([1.0, 2.0, 3.0]) if across is not None else np.ones(1)
-            trials = x[None] - factors[:, None, None] * step[None]
-            fz, gz = surface(trials), surface.gradient(trials)
+            step *= np.minimum(1.0, 0.5 * hk[live][:, None] / np.maximum(length, 1e-300))
+            trials = xs[None] - factors[:, None, None] * step[None]
+            fz, gz = surface.value_gradient(trials)
             norm = np.abs(fz) + np.abs(gz).sum(axis=-1)
             norm = np.where(np.isfinite(norm), norm, np.inf)
             best = np.argmin(norm, axis=0)
-            x = trials[best, np.arange(k)]
+            rows = np.arange(len(live))
+            x[live] = trials[best, rows]
             # At rounding level the residual stops falling: done there.
-            now = norm[best, np.arange(k)]
-            stalled = np.where(now >= 0.9 * previous, stalled + 1, 0)
-            previous = np.minimum(previous, now)
-            if np.all(stalled >= 3):
+            now = norm[best, rows]
+            stalled[live] = np.where(now >= 0.9 * previous[live], stalled[live] + 1, 0)
+            previous[live] = np.minimum(previous[live], now)
+            if each:
+                live = live[stalled[live] < 3]
+                if not len(live):
+                    break
+            elif np.all(stalled >= 3):
                 break
-        ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
+        ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= hk)
         ok[ok] = residual(surface, x[ok]) <= _limit(surface)
     return x, ok
 
@@ -241,9 +261,16 @@ def _normal_plane(t: np.ndarray) -> np.ndarray:
     """Orthonormal bases (k, 3, 2) of the planes normal to the directions t (k, 3)."""
     t = t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
     helper = np.where(np.abs(t[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
-    n1 = np.cross(t, helper)
+    n1 = _cross(t, helper)
     n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
-    return np.stack([n1, np.cross(t, n1)], axis=2)
+    return np.stack([n1, _cross(t, n1)], axis=2)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of (k, 3) arrays: ``np.cross``'s arithmetic without its overhead."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -904,6 +931,7 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
             special[v] = "end on the box" if on_box[v] else ("crossing of curves" if deg[v] > 2 else "end of the trace")
     names = list(names)
     P = P.copy()
+    jobs = []
     for v in np.nonzero(deg == 2)[0].tolist():
         if v in special:
             continue
@@ -916,16 +944,21 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
             special[v] = "pinch point" if {names[a], names[b]} == {"A1 double curve", "A1 isolated line"} \
                 else "change of type"
             # ... placed exactly: its neighbours bracket the change.
-            P[v] = _type_change(surface, P[a], P[b], names[a], names[b], step)
+            jobs.append((v, a, b, names[a], names[b]))
+    _place_changes(surface, P, jobs, step)
     # Changes of type along an edge: the special point is placed there.
     extra_pts, extra_names, extra_sheets, extra_arcs = [], [], [], []
     new_edges = []
     n = len(P)
+    change = [(a, b) for a, b in E.tolist() if not (names[a] == names[b] or a in special or b in special)]
+    placed = _type_changes(surface, P[[a for a, _ in change]], P[[b for _, b in change]],
+                           [names[a] for a, _ in change], [names[b] for _, b in change], step)
+    placed = iter(placed)
     for a, b in E.tolist():
         if names[a] == names[b] or a in special or b in special:
             new_edges.append((a, b))
             continue
-        x = _type_change(surface, P[a], P[b], names[a], names[b], step)
+        x = next(placed)
         v = n + len(extra_pts)
         extra_pts.append(x)
         pinch = {names[a], names[b]} == {"A1 double curve", "A1 isolated line"}
@@ -1041,46 +1074,106 @@ def _walk(g: nx.Graph, a: int, b: int, special: dict, seen: set) -> list[int]:
     return backward[::-1] + path
 
 
+def _place_changes(surface: Surface, P: np.ndarray, jobs: list, step: float) -> None:
+    """P[v] = the type change between P[a] and P[b] for each job (v, a, b, name_a, name_b), in place.
+
+    All at once, unless a job's bracket is another job's vertex (which must
+    be placed first): then one by one, in order.
+    """
+    if not jobs:
+        return
+    moved = {v for v, *_ in jobs}
+    if any(a in moved or b in moved for _, a, b, _, _ in jobs):
+        for v, a, b, name_a, name_b in jobs:
+            P[v] = _type_changes(surface, P[a][None], P[b][None], [name_a], [name_b], step)[0]
+        return
+    idx = [[v, a, b] for v, a, b, _, _ in jobs]
+    v, a, b = np.array(idx, np.int64).T
+    P[v] = _type_changes(surface, P[a], P[b], [j[3] for j in jobs], [j[4] for j in jobs], step)
+
+
 def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, name_b: str, step: float) -> np.ndarray:
     """Where the transversal type changes between two vertices of a curve: bisection."""
-    t = _unit(b - a)
+    return _type_changes(surface, a[None], b[None], [name_a], [name_b], step)[0]
 
-    def point(u):
-        z, _ = _correct(surface, (a + u * (b - a))[None], t[None], step)
-        return z[0]
 
-    length = float(np.linalg.norm(b - a))
-    if name_a.startswith("A1") and name_b.startswith("A1"):
-        # A pinch point: the determinant of the normal Hessian changes
-        # sign there: bisection on its sign, to rounding.
-        lo, hi = 0.0, 1.0
-        sign_lo = np.sign(_normal_det(surface, a, t))
-        x = a
-        # Points on the chord first (no Newton: a Hessian each), then on
-        # the curve once the bracket is narrow.
-        while (hi - lo) * length > tol.CURVE_PLACE * step:
-            mid = (lo + hi) / 2
-            narrow = (hi - lo) * length <= tol.CURVE_CHORD_PLACE * step
-            x = point(mid) if narrow else a + mid * (b - a)
-            f = np.sign(_normal_det(surface, x, t))
-            if f == 0:
-                break
-            if f == sign_lo:
-                lo = mid
-            else:
-                hi = mid
-        return point((lo + hi) / 2)
-    # Otherwise the type itself is bisected, to where it is read reliably.
-    lo, hi = 0.0, 1.0
-    x = a
-    while (hi - lo) * length > tol.CURVE_TYPE_PLACE * step:
-        mid = (lo + hi) / 2
-        x = point(mid)
-        if transversal_types(surface, x[None], t[None], tol.CURVE_CIRCLE_RADIUS * step)[0][0] == name_a:
-            lo = mid
-        else:
-            hi = mid
-    return x
+def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list, names_b: list,
+                  step: float) -> np.ndarray:
+    """Where the transversal type changes between a[i] and b[i] (k, 3), by bisection, all at once.
+
+    Between two A1 types (a pinch point) the determinant of the normal
+    Hessian changes sign: bisection on its sign, to rounding, on points of
+    the chord first (no Newton: a Hessian each), then on points Newton put
+    on the curve once the bracket is narrow.  Otherwise the type itself is
+    bisected, to where it is read reliably.  Each bracket is halved as if
+    alone (Newton stops point by point: ``_correct(each=True)``); the
+    brackets only share the evaluations.
+    """
+    k = len(a)
+    out = np.zeros((k, 3))
+    if k == 0:
+        return out
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    t = np.array([_unit(b[i] - a[i]) for i in range(k)])
+    length = np.array([float(np.linalg.norm(b[i] - a[i])) for i in range(k)])
+    pinch = np.array([na.startswith("A1") and nb.startswith("A1") for na, nb in zip(names_a, names_b)])
+    frames = [_normal_frame(t[i]) for i in range(k)]
+    lo, hi = np.zeros(k), np.ones(k)
+    x = a.copy()
+    place = np.where(pinch, tol.CURVE_PLACE, tol.CURVE_TYPE_PLACE) * step
+    sign_lo = np.zeros(k)
+    if pinch.any():
+        sign_lo[pinch] = np.sign(_normal_dets(surface, a[pinch], [frames[i] for i in np.nonzero(pinch)[0]]))
+    live = np.nonzero((hi - lo) * length > place)[0]
+
+    def on_curve(rows, u):
+        return _correct(surface, a[rows] + u[:, None] * (b[rows] - a[rows]), t[rows], step, each=True)[0]
+
+    while len(live):
+        mid = (lo[live] + hi[live]) / 2
+        # Pinch brackets: points on the chord while wide; on the curve
+        # once narrow, as the type brackets throughout.
+        newton = ~pinch[live] | ((hi[live] - lo[live]) * length[live] <= tol.CURVE_CHORD_PLACE * step)
+        xs = a[live] + mid[:, None] * (b[live] - a[live])
+        if newton.any():
+            xs[newton] = on_curve(live[newton], mid[newton])
+        x[live] = xs
+        upper = np.zeros(len(live), bool)
+        stop = np.zeros(len(live), bool)
+        p = pinch[live]
+        if p.any():
+            rows = live[p]
+            f = np.sign(_normal_dets(surface, xs[p], [frames[i] for i in rows]))
+            stop[p] = f == 0
+            upper[p] = f != sign_lo[rows]
+        if (~p).any():
+            rows = live[~p]
+            read = transversal_types(surface, xs[~p], t[rows], tol.CURVE_CIRCLE_RADIUS * step)[0]
+            upper[~p] = [nm != names_a[i] for nm, i in zip(read, rows)]
+        go = ~stop
+        hi[live[go & upper]] = mid[go & upper]
+        lo[live[go & ~upper]] = mid[go & ~upper]
+        live = live[go]
+        live = live[(hi[live] - lo[live]) * length[live] > place[live]]
+    out[:] = x
+    if pinch.any():
+        rows = np.nonzero(pinch)[0]
+        out[rows] = on_curve(rows, (lo[rows] + hi[rows]) / 2)
+    return out
+
+
+def _normal_frame(t: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (3, 2) of the plane normal to the unit vector t."""
+    helper = np.array([1.0, 0, 0]) if abs(t[0]) < 0.9 else np.array([0, 1.0, 0])
+    n1 = _unit(np.cross(t, helper))
+    n2 = np.cross(t, n1)
+    return np.stack([n1, n2], axis=1)
+
+
+def _normal_dets(surface: Surface, x: np.ndarray, frames: list) -> np.ndarray:
+    """Determinants of the Hessian at x (k, 3) restricted to each point's normal plane."""
+    h = surface.hessian(x)
+    return np.array([float(np.linalg.det(N.T @ h[i] @ N)) for i, N in enumerate(frames)])
 
 
 def _normal_det(surface: Surface, x: np.ndarray, t: np.ndarray) -> float:
