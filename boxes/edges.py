@@ -255,8 +255,13 @@ def compute_events(surface, tree: Octree) -> Events:
 
 def _zero_lattice_points(surface, tree, corners, uniq):
     """(line, position) of every leaf corner where F is zero, on each line through it."""
-    zero = surface.is_zero(tree.lattice_to_space(_corner_xyz(corners)))
-    xyz = _corner_xyz(corners[zero])
+    xyz = _corner_xyz(corners)
+    # A lattice point is a corner on up to three lines: F is read once there.
+    b = tol.MAX_LEVEL + 1
+    packed = (xyz[:, 0] << (2 * b)) | (xyz[:, 1] << b) | xyz[:, 2]
+    _, first, inverse = np.unique(packed, return_index=True, return_inverse=True)
+    zero = surface.is_zero(tree.lattice_to_space(xyz[first]))[inverse.ravel()]
+    xyz = xyz[zero]
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
     v = xyz[np.arange(len(a)), (a + 2) % 3]
