@@ -187,6 +187,11 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     if across is not None:
         plane = _normal_plane(np.asarray(across, dtype=float))
     live = np.arange(k)
+    # A point that a step leaves where it was is a fixed point of the
+    # step (each point's step depends on that point alone): it stays,
+    # and only its stall count (and whether it was still moving) goes on.
+    fixed = np.zeros(k, bool)
+    fixed_moving = np.zeros(k, bool)
     # Without a direction held fixed, longer steps could slide along the
     # curve: plain steps then.
     factors = np.array([1.0, 2.0, 3.0]) if across is not None else np.ones(1)
@@ -214,7 +219,7 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 live, xs, step, length = live[moving], xs[moving], step[moving], length[moving]
                 if not len(live):
                     break
-            elif not np.any(moving):
+            elif not (np.any(moving) or np.any(fixed_moving)):
                 break  # converged (or stuck) everywhere
             step *= np.minimum(1.0, 0.5 * hk[live][:, None] / np.maximum(length, 1e-300))
             trials = xs[None] - factors[:, None, None] * step[None]
@@ -223,7 +228,8 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
             norm = np.where(np.isfinite(norm), norm, np.inf)
             best = np.argmin(norm, axis=0)
             rows = np.arange(len(live))
-            x[live] = trials[best, rows]
+            new = trials[best, rows]
+            x[live] = new
             # At rounding level the residual stops falling: done there.
             now = norm[best, rows]
             stalled[live] = np.where(now >= 0.9 * previous[live], stalled[live] + 1, 0)
@@ -232,8 +238,16 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 live = live[stalled[live] < 3]
                 if not len(live):
                     break
-            elif np.all(stalled >= 3):
-                break
+            else:
+                stalled[fixed] += 1
+                if np.all(stalled >= 3):
+                    break
+                same = np.all((new == xs) | (np.isnan(new) & np.isnan(xs)), axis=1)
+                fixed[live[same]] = True
+                fixed_moving[live[same]] = moving[same]
+                live = live[~same]
+                if not len(live):
+                    break  # nothing moves any more
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= hk)
         ok[ok] = residual(surface, x[ok]) <= _limit(surface)
     return x, ok
