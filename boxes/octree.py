@@ -247,13 +247,18 @@ def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=No
         keep = ~empty_boxes(tensors)
         tensors, corner = tensors[keep], corner[keep]
         if level >= coarse_level:
-            simple = monotone_axis(tensors) >= 0
+            # Boxes meeting a region are not simple whatever the test says:
+            # the test (the costly part) runs on the others alone.
+            forced = np.zeros(len(corner), bool)
             if keep_splitting is not None and len(keep_splitting):
-                simple &= ~_relation(box, fine_level, level, corner, keep_splitting)[0]
+                forced |= _relation(box, fine_level, level, corner, keep_splitting)[0]
             in_star = np.zeros(len(corner), bool)
             if stars is not None and len(stars):
                 meets, in_star = _relation(box, fine_level, level, corner, stars)
-                simple &= ~in_star & ~meets
+                forced |= in_star | meets
+            simple = np.zeros(len(corner), bool)
+            test = np.nonzero(~forced)[0]
+            simple[test] = monotone_axis(tensors[test]) >= 0
             stop = simple | in_star | (level == fine_level)
             leaves_t.append(tensors[stop])
             leaves_c.append(corner[stop])
