@@ -16,7 +16,6 @@ and evaluates all of them at points.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -51,22 +50,6 @@ def _powers(values: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def _rows(p: np.ndarray) -> np.ndarray:
-    """Points as (K, 3) rows, a single point doubled.
-
-    BLAS multiplies one row by a matrix (gemv) in another order than
-    several (gemm), which changes the last bits: doubled, a point gets the
-    same value alone as in any batch, so that work done for many points
-    at once gives what it gives point by point.
-    """
-    p = p.reshape(-1, 3)
-    return np.concatenate([p, p]) if len(p) == 1 else p
-
-
-def _count(shape: tuple) -> int:
-    return math.prod(shape)
-
-
 def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Evaluate the polynomial with monomial tensor ``coeffs`` at ``points``.
 
@@ -92,8 +75,7 @@ def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
     p = np.asarray(points, dtype=float)
     nx, ny, nz = tensors[0].shape
     shape = p.shape[:-1]
-    count = _count(shape)
-    p = _rows(p)
+    p = p.reshape(-1, 3)
     px, py, pz = _powers(p[:, 0], nx), _powers(p[:, 1], ny)[:, None, :], _powers(p[:, 2], nz)
     out = []
     for coeffs in tensors:
@@ -102,7 +84,7 @@ def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
         t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
         # Batched matrix products (BLAS), not einsum's slow generic loop.
         t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
-        out.append(np.einsum("kl,kl->k", t, pz)[:count].reshape(shape))
+        out.append(np.einsum("kl,kl->k", t, pz).reshape(shape))
     return out
 
 
@@ -251,14 +233,14 @@ class Surface:
         """
         p = np.asarray(points, dtype=float)
         shape = p.shape[:-1]
-        p = _rows(p)
+        p = p.reshape(-1, 3)
         c = self.jet_coeffs
         m, nx, ny, nz = c.shape
         # One variable at a time, as matrix products (BLAS): x against the
         # (x; y, component, z) table, then y and z row by row.
         t = _powers(p[:, 0], nx) @ c.transpose(1, 2, 0, 3).reshape(nx, -1)  # (K, ny*m*nz)
         t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, m * nz))  # (K, 1, m*nz)
-        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:_count(shape), :, 0]  # (K, m)
+        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:, :, 0]  # (K, m)
         f = v[:, 0].reshape(shape)
         g = v[:, 1:4].reshape(shape + (3,))
         h = v[:, [4, 5, 6, 5, 7, 8, 6, 8, 9]].reshape(shape + (3, 3))

@@ -195,10 +195,13 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     # Without a direction held fixed, longer steps could slide along the
     # curve: plain steps then.
     factors = np.array([1.0, 2.0, 3.0]) if across is not None else np.ones(1)
+    # Values at each point exactly as the plain call gives them (BLAS
+    # takes one point (gemv) in another order than several (gemm)).
+    alone = each or k == 1
     with np.errstate(all="ignore"):
         for _ in range(tol.CURVE_NEWTON):
             xs = x[live]
-            f, g, hh = surface.jet(xs)
+            f, g, hh = _rows_eval(surface.jet, xs, alone)
             r = np.concatenate([f[:, None], g], axis=1)
             j = np.concatenate([g[:, None, :], hh], axis=1)
             if across is None:
@@ -223,7 +226,8 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 break  # converged (or stuck) everywhere
             step *= np.minimum(1.0, 0.5 * hk[live][:, None] / np.maximum(length, 1e-300))
             trials = xs[None] - factors[:, None, None] * step[None]
-            fz, gz = surface.value_gradient(trials)
+            fz, gz = _rows_eval(surface.value_gradient, trials.reshape(-1, 3), alone and len(factors) == 1)
+            fz, gz = fz.reshape(trials.shape[:2]), gz.reshape(trials.shape)
             norm = np.abs(fz) + np.abs(gz).sum(axis=-1)
             norm = np.where(np.isfinite(norm), norm, np.inf)
             best = np.argmin(norm, axis=0)
@@ -249,8 +253,30 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 if not len(live):
                     break  # nothing moves any more
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= hk)
-        ok[ok] = residual(surface, x[ok]) <= _limit(surface)
+        if each:
+            ok[ok] = _rows_eval(lambda y: residual(surface, y), x[ok], True) <= _limit(surface)
+        else:
+            ok[ok] = residual(surface, x[ok]) <= _limit(surface)
     return x, ok
+
+
+def _rows_eval(fn, x: np.ndarray, alone: bool):
+    """fn at the rows of x (n, 3): each row alone if ``alone``, else as rows of a batch of several.
+
+    BLAS multiplies one row by a matrix (gemv) in another order than
+    several (gemm), which changes the last bits of a polynomial's value:
+    work done for many points at once reproduces the point-by-point
+    calls (``alone``), or a batch that has shrunk to one point the batch.
+    """
+    if alone and len(x) > 1:
+        parts = [fn(x[i:i + 1]) for i in range(len(x))]
+        if isinstance(parts[0], tuple):
+            return tuple(np.concatenate(p) for p in zip(*parts))
+        return np.concatenate(parts)
+    if not alone and len(x) == 1:
+        out = fn(np.concatenate([x, x]))
+        return tuple(o[:1] for o in out) if isinstance(out, tuple) else out[:1]
+    return fn(x)
 
 
 def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bool = False) -> np.ndarray:
@@ -1162,7 +1188,8 @@ def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list,
             upper[p] = f != sign_lo[rows]
         if (~p).any():
             rows = live[~p]
-            read = transversal_types(surface, xs[~p], t[rows], tol.CURVE_CIRCLE_RADIUS * step)[0]
+            read = [transversal_types(surface, y[None], t[i][None], tol.CURVE_CIRCLE_RADIUS * step)[0][0]
+                    for y, i in zip(xs[~p], rows)]
             upper[~p] = [nm != names_a[i] for nm, i in zip(read, rows)]
         go = ~stop
         hi[live[go & upper]] = mid[go & upper]
@@ -1186,8 +1213,7 @@ def _normal_frame(t: np.ndarray) -> np.ndarray:
 
 def _normal_dets(surface: Surface, x: np.ndarray, frames: list) -> np.ndarray:
     """Determinants of the Hessian at x (k, 3) restricted to each point's normal plane."""
-    h = surface.hessian(x)
-    return np.array([float(np.linalg.det(N.T @ h[i] @ N)) for i, N in enumerate(frames)])
+    return np.array([float(np.linalg.det(N.T @ surface.hessian(x[i]) @ N)) for i, N in enumerate(frames)])
 
 
 def _normal_det(surface: Surface, x: np.ndarray, t: np.ndarray) -> float:
