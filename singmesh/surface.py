@@ -73,9 +73,29 @@ def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
     value is computed exactly as :func:`evaluate_tensor` computes it alone.
     """
     p = np.asarray(points, dtype=float)
-    nx, ny, nz = tensors[0].shape
     shape = p.shape[:-1]
     p = p.reshape(-1, 3)
+    # Many points go in blocks: the (K, ny * nz) intermediate of a whole
+    # large batch does not fit in cache and costs several times more.
+    # Each row's value does not depend on the block (BLAS's gemm), but a
+    # block of one row would be gemv: a last single row joins the block before.
+    starts = list(range(0, len(p), _BLOCK)) or [0]
+    if len(starts) > 1 and len(p) - starts[-1] == 1:
+        starts.pop()
+    ends = starts[1:] + [len(p)]
+    blocks = [_contract(tensors, p[a:b]) for a, b in zip(starts, ends)]
+    if len(blocks) == 1:
+        return [v.reshape(shape) for v in blocks[0]]
+    return [np.concatenate(v).reshape(shape) for v in zip(*blocks)]
+
+
+#: Points per block in :func:`evaluate_tensors`.
+_BLOCK = 8192
+
+
+def _contract(tensors, p: np.ndarray) -> list[np.ndarray]:
+    """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3)."""
+    nx, ny, nz = tensors[0].shape
     px, py, pz = _powers(p[:, 0], nx), _powers(p[:, 1], ny)[:, None, :], _powers(p[:, 2], nz)
     out = []
     for coeffs in tensors:
@@ -84,7 +104,7 @@ def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
         t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
         # Batched matrix products (BLAS), not einsum's slow generic loop.
         t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
-        out.append(np.einsum("kl,kl->k", t, pz).reshape(shape))
+        out.append(np.einsum("kl,kl->k", t, pz))
     return out
 
 
