@@ -93,8 +93,12 @@ def triangulate_polygons(
         poly = indices[offsets[sel][:, None] + np.arange(n)]
         if n <= tol.MAX_TEMPLATE_POLYGON:
             if n > 3:
-                templated.append((len(faces), poly))
-            faces.append(poly if n == 3 else _best_template(poly, points, normals))
+                # The triangles' qualities are kept for choosing again.
+                quality = _template_quality(poly, points, normals)
+                templated.append((len(faces), poly, quality))
+                faces.append(_choose_template(poly, quality))
+            else:
+                faces.append(poly)
             owner.append(np.repeat(sel, n - 2))
             continue
         if fan_from_first is not None and fan_from_first[sel].any():
@@ -125,8 +129,8 @@ def triangulate_polygons(
         dup = _duplicated(np.concatenate(faces), n_vertices)
         if len(dup) == 0:
             break
-        for slot, poly in templated:
-            faces[slot] = _best_template(poly, points, normals, forbidden=dup, n_vertices=n_vertices)
+        for slot, poly, quality in templated:
+            faces[slot] = _choose_template(poly, quality, forbidden=dup, n_vertices=n_vertices)
     faces = np.concatenate(faces)
     owner = np.concatenate(owner)
     # What is left doubled (two identical 3-gons) is a pillow of zero
@@ -152,19 +156,28 @@ def _duplicated(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return uniq[counts > 1]
 
 
-def _best_template(poly: np.ndarray, points: np.ndarray, normals: np.ndarray,
-                   forbidden: np.ndarray | None = None, n_vertices: int = 0) -> np.ndarray:
-    """The triangulation of each polygon whose smallest angle is largest.
+def _template_quality(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Quality (:func:`triangle_quality`) of every triangle of the polygons' vertices: (P, C(n, 3))."""
+    combos = _combos(poly.shape[1])
+    normal = normals[poly].sum(axis=1)
+    return triangle_quality(points[poly[:, combos]], normal[:, None, :])
+
+
+def _combos(n: int) -> np.ndarray:
+    return np.array(list(combinations(range(n), 3)))
+
+
+def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | None = None,
+                     n_vertices: int = 0) -> np.ndarray:
+    """The triangulation of each polygon whose smallest angle is largest, from the qualities q.
 
     Triangles in ``forbidden`` (keys of :func:`_triple_keys`) count as worst.
     """
     n = poly.shape[1]
     templates = polygon_triangulations(n)
-    combos = np.array(list(combinations(range(n), 3)))
+    combos = _combos(n)
     lookup = {tuple(c): i for i, c in enumerate(combos)}
     tmpl_idx = np.array([[lookup[tuple(sorted(t))] for t in tr] for tr in templates])
-    normal = normals[poly].sum(axis=1)
-    q = triangle_quality(points[poly[:, combos]], normal[:, None, :])  # (P, C)
     if forbidden is not None and len(forbidden):
         q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), -2.0, q)
     score = q[:, tmpl_idx].min(axis=2)  # (P, T)
