@@ -1214,11 +1214,3 @@ def _normal_frame(t: np.ndarray) -> np.ndarray:
 def _normal_dets(surface: Surface, x: np.ndarray, frames: list) -> np.ndarray:
     """Determinants of the Hessian at x (k, 3) restricted to each point's normal plane."""
     return np.array([float(np.linalg.det(N.T @ surface.hessian(x[i]) @ N)) for i, N in enumerate(frames)])
-
-
-def _normal_det(surface: Surface, x: np.ndarray, t: np.ndarray) -> float:
-    helper = np.array([1.0, 0, 0]) if abs(t[0]) < 0.9 else np.array([0, 1.0, 0])
-    n1 = _unit(np.cross(t, helper))
-    n2 = np.cross(t, n1)
-    N = np.stack([n1, n2], axis=1)
-    return float(np.linalg.det(N.T @ surface.hessian(x) @ N))
