@@ -160,6 +160,13 @@ CURVE_SAMPLES = 9
 #: residual below this next to its box.  An isolated A5 four boxes away
 #: is at ~1e-7.
 CURVE_RESIDUAL = 1e-8
+#: A vertex of a traced curve must get its relative residual below this
+#: (or what the input's rounding allows): off a curve of singular points F
+#: and grad F can both be as small as CURVE_RESIDUAL along a valley (near
+#: the swallowtail point, where they vanish to high order), which a trace
+#: would follow off the curve.  Newton across the curve (held in the normal
+#: plane, multiplicity steps tried) reaches rounding level on it.
+CURVE_VERTEX_RESIDUAL = 1e-10
 
 #: More candidate boxes than this for skeleton nodes (F and two partial
 #: derivatives zero) are a curve of them (a surface of revolution), not points.

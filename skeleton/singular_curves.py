@@ -164,9 +164,19 @@ def _limit(surface: Surface) -> float:
     return max(accept_residual(surface), tol.CURVE_RESIDUAL)
 
 
+def _vertex_limit(surface: Surface) -> float:
+    """The residual a vertex of a traced curve must reach (stricter than a sample's :func:`_limit`)."""
+    from .singular import accept_residual
+
+    return max(accept_residual(surface), tol.CURVE_VERTEX_RESIDUAL)
+
+
 # ---------------------------------------------------------------- tracing
-def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
+def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float, limit: float | None = None):
     """Newton from points q (k, 3) onto the curve, steps orthogonal to ``across`` (k, 3).
+
+    A point is accepted (``ok``) with a relative residual below ``limit``
+    (default :func:`_limit`).
 
     Across a cuspidal or tacnode edge the root is multiple and Newton only
     halves (or takes 2/3 of) the distance per step; each step is therefore
@@ -215,7 +225,7 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
             if np.all(stalled >= 3):
                 break
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
-        ok[ok] = residual(surface, x[ok]) <= _limit(surface)
+        ok[ok] = residual(surface, x[ok]) <= (_limit(surface) if limit is None else limit)
     return x, ok
 
 
@@ -294,7 +304,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
         y = None
         for scale in (1.0, 0.5, 0.25):
             q = x + scale * h * t
-            z, ok = _correct(surface, q[None], t[None], scale * h)
+            z, ok = _correct(surface, q[None], t[None], scale * h, _vertex_limit(surface))
             if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
                 y = z[0]
                 break
@@ -526,7 +536,7 @@ def densify(surface: Surface, polylines: list, pieces: int) -> list:
     owner = np.concatenate(owners)
     length = np.linalg.norm(d, axis=1)
     t = d / np.maximum(length, 1e-300)[:, None]
-    x, ok = _correct(surface, q, t, float(length.max()) / pieces)
+    x, ok = _correct(surface, q, t, float(length.max()) / pieces, _vertex_limit(surface))
     out = []
     for k, (p, closed) in enumerate(polylines):
         mine = owner[:, 0] == k
@@ -1042,7 +1052,21 @@ def _walk(g: nx.Graph, a: int, b: int, special: dict, seen: set) -> list[int]:
 
 
 def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, name_b: str, step: float) -> np.ndarray:
-    """Where the transversal type changes between two vertices of a curve: bisection."""
+    """Where the transversal type changes between two vertices of a curve: bisection.
+
+    The point is a vertex of the curve, so it must be on it to rounding:
+    where Newton cannot put it there (next to a point where the locus is
+    itself singular, as the swallowtail point), the nearer of a and b
+    (both on the curve) is the special point instead.
+    """
+    x = _type_change_point(surface, a, b, name_a, name_b, step)
+    if np.isfinite(x).all() and residual(surface, x[None])[0] <= _vertex_limit(surface):
+        return x
+    return a if np.linalg.norm(x - a) <= np.linalg.norm(x - b) else b
+
+
+def _type_change_point(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, name_b: str,
+                       step: float) -> np.ndarray:
     t = _unit(b - a)
 
     def point(u):

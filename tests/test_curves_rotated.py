@@ -46,3 +46,16 @@ def test_roman_surface_tube_meets_itself_only_across_faces():
     # it were zipped to the same curve vertex (an edge of four triangles
     # ten cells off the curve).
     check_curve_mesh(float_rotated(ROMAN, 112), BOX1, 1, fine=128)
+
+
+SWALLOWTAIL = "16 x^4 z - 4 x^3 y^2 - 128 x^2 z^2 + 144 x y^2 z - 27 y^4 + 256 z^3"
+
+
+def test_swallowtail_curve_vertices_on_the_curve():
+    # The discriminant of t^4 + x t^2 + y t + z: a double curve turning
+    # into an isolated line at the swallowtail point, where two cuspidal
+    # edges start.  F and grad F vanish to high order there, so next to it
+    # they stay below 1e-8 along a valley off the curve (z = x^2 / 12 on
+    # y = 0, the isolated line being z = x^2 / 4): traced vertices and the
+    # type changes placed there were off the surface.
+    check_curve_mesh(float_rotated(SWALLOWTAIL, 40), BOX1, 1)
