@@ -229,6 +229,25 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h: float, limi
     return x, ok
 
 
+def _correct_vertex(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
+    """:func:`_correct` to a curve vertex's residual (:func:`_vertex_limit`).
+
+    Where the first round of Newton stops short of it (linear convergence
+    across a cuspidal edge) a second round goes on from there; a point
+    in a valley of small F and grad F off the curve stays where it is and
+    is refused.
+    """
+    limit = _vertex_limit(surface)
+    x, ok = _correct(surface, q, across, h, limit)
+    again = ~ok & np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
+    if again.any():
+        y, good = _correct(surface, x[again], across[again], h, limit)
+        good &= np.linalg.norm(y - q[again], axis=1) <= h
+        x[again] = np.where(good[:, None], y, x[again])
+        ok[again] = good
+    return x, ok
+
+
 def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bool = False) -> np.ndarray:
     """Minimum-norm least-squares steps j^+ r, singular values below ``floor`` dropped.
 
@@ -304,7 +323,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
         y = None
         for scale in (1.0, 0.5, 0.25):
             q = x + scale * h * t
-            z, ok = _correct(surface, q[None], t[None], scale * h, _vertex_limit(surface))
+            z, ok = _correct_vertex(surface, q[None], t[None], scale * h)
             if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
                 y = z[0]
                 break
@@ -536,7 +555,7 @@ def densify(surface: Surface, polylines: list, pieces: int) -> list:
     owner = np.concatenate(owners)
     length = np.linalg.norm(d, axis=1)
     t = d / np.maximum(length, 1e-300)[:, None]
-    x, ok = _correct(surface, q, t, float(length.max()) / pieces, _vertex_limit(surface))
+    x, ok = _correct_vertex(surface, q, t, float(length.max()) / pieces)
     out = []
     for k, (p, closed) in enumerate(polylines):
         mine = owner[:, 0] == k
@@ -728,6 +747,8 @@ def transversal_types(surface: Surface, points: np.ndarray, tangents: np.ndarray
             rank = 1
         else:
             rank = 2
+        if rank == 2 and small[i] <= tol.CURVE_RANK_MARGIN * big[i] and a != (0 if lam[i, 0] * lam[i, 1] > 0 else 4):
+            rank = 1  # a small eigenvalue of rounding noise, the circle says (a cusp read off the curve)
         if rank == 2:
             if lam[i, 0] * lam[i, 1] < 0:
                 name, s = "A1 double curve", 2
