@@ -124,13 +124,33 @@ def triangulate_polygons(
     # Two facets may pick the same triangle with opposite orientations (the
     # two sheets of a thin lens that the perturbation collapsed): forbid
     # such triangles and choose again, for the facets concerned only.
+    # Likewise two facets on either side of a face may both cut across it
+    # along the same diagonal (the surface pierces the face in two arcs,
+    # one piece on each side: a tube, which the shared diagonal pinches):
+    # an edge of more than two triangles that is a diagonal of a facet is
+    # forbidden to the facets concerned, and they choose again.
     n_vertices = len(points) + sum(len(p) for p in new_points)
+    crowded = np.zeros(0, np.int64)
     for _ in range(3):
-        dup = _duplicated(np.concatenate(faces), n_vertices)
-        if len(dup) == 0:
+        every = np.concatenate(faces)
+        dup = _duplicated(every, n_vertices)
+        fresh = np.setdiff1d(_crowded_edges(every, n_vertices), crowded)
+        if len(dup) == 0 and len(fresh) == 0:
             break
+        crowded = np.union1d(crowded, fresh)
+        # Only the facets with two corners at such an edge or triangle
+        # choose again (edges along a singular curve are crowded by right).
+        involved = np.zeros(n_vertices, bool)
+        involved[np.concatenate([crowded // max(n_vertices, 1), crowded % max(n_vertices, 1)])] = True
+        involved[_triple_vertices(dup)] = True
         for slot, poly, quality in templated:
-            faces[slot] = _choose_template(poly, quality, forbidden=dup, n_vertices=n_vertices)
+            again = involved[poly].sum(axis=1) >= 2
+            if not again.any():
+                continue
+            tri = faces[slot].reshape(len(poly), -1, 3).copy()
+            tri[again] = _choose_template(poly[again], quality[again], forbidden=dup, n_vertices=n_vertices,
+                                          forbidden_edges=crowded).reshape(int(again.sum()), -1, 3)
+            faces[slot] = tri.reshape(-1, 3)
     faces = np.concatenate(faces)
     owner = np.concatenate(owner)
     # What is left doubled (two identical 3-gons) is a pillow of zero
@@ -150,10 +170,29 @@ def _triple_keys(tri: np.ndarray, n_vertices: int) -> np.ndarray:
     return (t[..., 0] << 42) | (t[..., 1] << 21) | t[..., 2]
 
 
+def _triple_vertices(keys: np.ndarray) -> np.ndarray:
+    """The vertex indices of triple keys (:func:`_triple_keys`; exact below 2**21 vertices)."""
+    mask = (1 << 21) - 1
+    return np.concatenate([(keys >> 42) & mask, (keys >> 21) & mask, keys & mask]).astype(np.int64)
+
+
 def _duplicated(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     keys = _triple_keys(faces, n_vertices)
     uniq, counts = np.unique(keys, return_counts=True)
     return uniq[counts > 1]
+
+
+def _edge_keys(a: np.ndarray, b: np.ndarray, n_vertices: int) -> np.ndarray:
+    """One int64 per unordered vertex pair."""
+    a, b = np.minimum(a, b).astype(np.int64), np.maximum(a, b).astype(np.int64)
+    return a * max(int(n_vertices), 1) + b
+
+
+def _crowded_edges(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Keys (:func:`_edge_keys`) of the edges of more than two triangles."""
+    keys = _edge_keys(faces, np.roll(faces, -1, axis=1), n_vertices).ravel()
+    uniq, counts = np.unique(keys, return_counts=True)
+    return uniq[counts > 2]
 
 
 def _template_quality(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
@@ -168,10 +207,12 @@ def _combos(n: int) -> np.ndarray:
 
 
 def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | None = None,
-                     n_vertices: int = 0) -> np.ndarray:
+                     n_vertices: int = 0, forbidden_edges: np.ndarray | None = None) -> np.ndarray:
     """The triangulation of each polygon whose smallest angle is largest, from the qualities q.
 
-    Triangles in ``forbidden`` (keys of :func:`_triple_keys`) count as worst.
+    Triangles in ``forbidden`` (keys of :func:`_triple_keys`), and those
+    with a diagonal of the polygon in ``forbidden_edges`` (keys of
+    :func:`_edge_keys`), count as worst.
     """
     n = poly.shape[1]
     templates = polygon_triangulations(n)
@@ -180,6 +221,15 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
     tmpl_idx = np.array([[lookup[tuple(sorted(t))] for t in tr] for tr in templates])
     if forbidden is not None and len(forbidden):
         q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), -2.0, q)
+    if forbidden_edges is not None and len(forbidden_edges):
+        # The sides of each triangle that are diagonals of the polygon
+        # (its own sides are in every triangulation).
+        ends = combos[:, [[0, 1], [1, 2], [0, 2]]]                       # (C, 3, 2) local
+        gap = ends[..., 1] - ends[..., 0]
+        diagonal = (gap != 1) & (gap != n - 1)                           # (C, 3)
+        keys = _edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
+        bad = (np.isin(keys, forbidden_edges) & diagonal[None]).any(axis=2)
+        q = np.where(bad, -2.0, q)
     score = q[:, tmpl_idx].min(axis=2)  # (P, T)
     best = np.argmax(score, axis=1)
     tri_local = templates[best]  # (P, n-2, 3)

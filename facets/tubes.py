@@ -181,6 +181,38 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
         if not grow.any():
             break
         inside |= grow
+    return _fill_diagonal_edges(links, inside)
+
+
+def _fill_diagonal_edges(links, inside: np.ndarray, rounds: int = 4) -> np.ndarray:
+    """The tube with the leaves added that make it meet itself only across faces at events.
+
+    Where two tube leaves share only a lattice edge (the two other leaves
+    round it outside the tube), an event on that edge has four links on
+    the tube's boundary instead of two: two rails pass through it, and
+    the strips zipping both to the curve share the edge from it to the
+    curve (four triangles off the curve).  The two outer leaves round such
+    an event (the outer sides of its boundary links) join the tube.
+    """
+    if len(links.link_square) == 0:
+        return inside
+    sq = links.link_square
+    minus, plus = links.minus[sq], links.plus[sq]
+    for _ in range(rounds):
+        in_m = (minus >= 0) & inside[np.maximum(minus, 0)]
+        in_p = (plus >= 0) & inside[np.maximum(plus, 0)]
+        boundary = in_m != in_p
+        if not boundary.any():
+            break
+        ends = np.concatenate([links.start[boundary], links.end[boundary]])
+        events, count = np.unique(ends, return_counts=True)
+        crowded = events[count > 2]
+        if len(crowded) == 0:
+            break
+        at = boundary & (np.isin(links.start, crowded) | np.isin(links.end, crowded))
+        outer = np.concatenate([minus[at & in_p], plus[at & in_m]])
+        inside = inside.copy()
+        inside[outer[outer >= 0]] = True
     return inside
 
 

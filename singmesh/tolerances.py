@@ -160,6 +160,17 @@ CURVE_SAMPLES = 9
 #: residual below this next to its box.  An isolated A5 four boxes away
 #: is at ~1e-7.
 CURVE_RESIDUAL = 1e-8
+#: A vertex of a traced curve must get its relative residual below this
+#: (or what the input's rounding allows): off a curve of singular points F
+#: and grad F can both be as small as CURVE_RESIDUAL along a valley (near
+#: the swallowtail point, where they vanish to high order), which a trace
+#: would follow off the curve (there 3.6 x^5 / 291 at x from it on the
+#: swallowtail of the sweep: above this from 3 cells out; 1e-9 let the
+#: traces in 5 cells and join wrongly).  Newton across the curve (held in
+#: the normal plane, multiplicity steps tried) gets below it on the curve;
+#: on a cuspidal edge of rounded input (linear convergence) it may take a
+#: second round of CURVE_NEWTON steps.
+CURVE_VERTEX_RESIDUAL = 1e-10
 
 #: More candidate boxes than this for skeleton nodes (F and two partial
 #: derivatives zero) are a curve of them (a surface of revolution), not points.
@@ -228,6 +239,12 @@ CURVE_CIRCLE_RADIUS = 3.0
 #: this times the largest (relative to the polynomial's coefficients for
 #: the largest).
 CURVE_RANK_RTOL = 1e-6
+#: ... and a small eigenvalue below this times the largest reads rank two
+#: only if the circle agrees (no arc for an isolated line, four for two
+#: sheets): on a cuspidal edge of rounded input a vertex a little off the
+#: curve has a small eigenvalue of up to ~2e-5 of the largest, and the
+#: circle sees the cusp's two arcs.
+CURVE_RANK_MARGIN = 1e-4
 
 #: The tube of fine leaves meshed along a curve: leaves within this many
 #: cells of it, and the non-simple leaves next to them up to CURVE_TUBE_GROW

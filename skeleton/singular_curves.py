@@ -164,9 +164,20 @@ def _limit(surface: Surface) -> float:
     return max(accept_residual(surface), tol.CURVE_RESIDUAL)
 
 
+def _vertex_limit(surface: Surface) -> float:
+    """The residual a vertex of a traced curve must reach (stricter than a sample's :func:`_limit`)."""
+    from .singular import accept_residual
+
+    return max(accept_residual(surface), tol.CURVE_VERTEX_RESIDUAL)
+
+
 # ---------------------------------------------------------------- tracing
-def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool = False):
+def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool = False,
+             limit: float | None = None):
     """Newton from points q (k, 3) onto the curve, steps orthogonal to ``across`` (k, 3).
+
+    A point is accepted (``ok``) with a relative residual below ``limit``
+    (default :func:`_limit`).
 
     Across a cuspidal or tacnode edge the root is multiple and Newton only
     halves (or takes 2/3 of) the distance per step; each step is therefore
@@ -253,10 +264,30 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 if not len(live):
                     break  # nothing moves any more
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= hk)
+        limit = _limit(surface) if limit is None else limit
         if each:
-            ok[ok] = _rows_eval(lambda y: residual(surface, y), x[ok], True) <= _limit(surface)
+            ok[ok] = _rows_eval(lambda y: residual(surface, y), x[ok], True) <= limit
         else:
-            ok[ok] = residual(surface, x[ok]) <= _limit(surface)
+            ok[ok] = residual(surface, x[ok]) <= limit
+    return x, ok
+
+
+def _correct_vertex(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
+    """:func:`_correct` to a curve vertex's residual (:func:`_vertex_limit`).
+
+    Where the first round of Newton stops short of it (linear convergence
+    across a cuspidal edge) a second round goes on from there; a point
+    in a valley of small F and grad F off the curve stays where it is and
+    is refused.
+    """
+    limit = _vertex_limit(surface)
+    x, ok = _correct(surface, q, across, h, limit=limit)
+    again = ~ok & np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
+    if again.any():
+        y, good = _correct(surface, x[again], across[again], h, limit=limit)
+        good &= np.linalg.norm(y - q[again], axis=1) <= h
+        x[again] = np.where(good[:, None], y, x[again])
+        ok[again] = good
     return x, ok
 
 
@@ -361,7 +392,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
         y = None
         for scale in (1.0, 0.5, 0.25):
             q = x + scale * h * t
-            z, ok = _correct(surface, q[None], t[None], scale * h)
+            z, ok = _correct_vertex(surface, q[None], t[None], scale * h)
             if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
                 y = z[0]
                 break
@@ -593,7 +624,7 @@ def densify(surface: Surface, polylines: list, pieces: int) -> list:
     owner = np.concatenate(owners)
     length = np.linalg.norm(d, axis=1)
     t = d / np.maximum(length, 1e-300)[:, None]
-    x, ok = _correct(surface, q, t, float(length.max()) / pieces)
+    x, ok = _correct_vertex(surface, q, t, float(length.max()) / pieces)
     out = []
     for k, (p, closed) in enumerate(polylines):
         mine = owner[:, 0] == k
@@ -785,6 +816,8 @@ def transversal_types(surface: Surface, points: np.ndarray, tangents: np.ndarray
             rank = 1
         else:
             rank = 2
+        if rank == 2 and small[i] <= tol.CURVE_RANK_MARGIN * big[i] and a != (0 if lam[i, 0] * lam[i, 1] > 0 else 4):
+            rank = 1  # a small eigenvalue of rounding noise, the circle says (a cusp read off the curve)
         if rank == 2:
             if lam[i, 0] * lam[i, 1] < 0:
                 name, s = "A1 double curve", 2
@@ -1200,7 +1233,16 @@ def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list,
     if pinch.any():
         rows = np.nonzero(pinch)[0]
         out[rows] = on_curve(rows, (lo[rows] + hi[rows]) / 2)
-    return out
+    # Each point is a vertex of the curve, so it must be on it to rounding:
+    # where Newton cannot put it there (next to a point where the locus is
+    # itself singular, as the swallowtail point), the nearer of a and b
+    # (both on the curve) is the special point instead.
+    finite = np.isfinite(out).all(axis=1)
+    on = np.zeros(k, bool)
+    on[finite] = _rows_eval(lambda y: residual(surface, y), out[finite], True) <= _vertex_limit(surface)
+    nearer_a = np.linalg.norm(out - a, axis=1) <= np.linalg.norm(out - b, axis=1)
+    fallback = np.where(nearer_a[:, None], a, b)
+    return np.where(on[:, None], out, fallback)
 
 
 def _normal_frame(t: np.ndarray) -> np.ndarray:

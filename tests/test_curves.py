@@ -81,7 +81,13 @@ def singular_locus(text: str, box, starts: int = 3000, seed: int = 5) -> np.ndar
         # Levenberg-Marquardt steps, all starts at once.
         jt = np.transpose(jm, (0, 2, 1))
         a = jt @ jm + 1e-12 * np.eye(3)
-        step = np.linalg.solve(a, -(jt @ r[..., None]))[..., 0]
+        try:
+            step = np.linalg.solve(a, -(jt @ r[..., None]))[..., 0]
+        except np.linalg.LinAlgError:
+            # A start on a curve of singular points (beyond the box) whose
+            # J^T J is singular to rounding: damping in proportion to its size.
+            scale = 1.0 + np.trace(a, axis1=1, axis2=2)[:, None, None]
+            step = np.linalg.solve(a + 1e-12 * scale * np.eye(3), -(jt @ r[..., None]))[..., 0]
         p = p + np.clip(step, -0.1, 0.1)
     r = np.abs(R(p)).max(axis=1)
     ok = np.isfinite(p).all(axis=1) & (r < 1e-10) & np.all((p >= box[:, 0]) & (p <= box[:, 1]), axis=1)
