@@ -146,8 +146,13 @@ NEWTON_STILL = 4 * 2.0 ** -52
 SINGULAR_RESIDUAL = 1e-12
 
 #: Candidate boxes of the singular-point search are split at most this
-#: many at a time (memory: four Bernstein tensors each, 8 children).
-CANDIDATE_CHUNK = 2048
+#: many at a time (memory: four Bernstein tensors each, 8 children; a
+#: few MB of children at a time stay in cache, ten times that do not).
+CANDIDATE_CHUNK = 256
+
+#: Boxes of the subdivision are split this many at a time, and their empty
+#: children dropped at once (a whole level's children can be gigabytes).
+SPLIT_CHUNK = 256
 
 #: Candidate boxes of the singular-point search in a connected clump this
 #: many boxes long may lie on a curve of singular points; CURVE_SAMPLES
