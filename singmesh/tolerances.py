@@ -145,6 +145,12 @@ NEWTON_STILL = 4 * 2.0 ** -52
 #: below what the input's rounding allows, whichever is larger).
 SINGULAR_RESIDUAL = 1e-12
 
+#: The candidate boxes a search ends with are kept (tensors and all), for
+#: a deeper search of the same surface to go on from, up to this size: the
+#: curve search's level-6 boxes of a surface with hundreds of nodes are
+#: tens of MB, and the point search at level 8 then skips six levels.
+CANDIDATE_KEEP_BYTES = 64 * 2**20
+
 #: Candidate boxes of the singular-point search are split at most this
 #: many at a time (memory: four Bernstein tensors each, 8 children; a
 #: few MB of children at a time stay in cache, ten times that do not).

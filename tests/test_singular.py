@@ -232,3 +232,23 @@ def test_skeleton_nodes_against_sympy():
     assert len(got) == len(truth) == 2
     for p in truth:
         assert np.abs(got - p).max(axis=1).min() <= 1e-10
+
+
+def test_deeper_candidate_search_goes_on_from_the_kept_boxes():
+    """The point search (level 8) starts from the boxes the curve search
+    (level 6) ended with on the same surface: the same boxes as a search
+    from the whole box, on a fresh parse, and each true node is in one."""
+    from benchmarks import nodes
+
+    from singmesh.skeleton.singular import candidate_boxes
+
+    text = "4(t^2 x^2-y^2)(t^2 y^2-z^2)(t^2 z^2-x^2) - (1+2t)(x^2+y^2+z^2-1)^2; t = (1+sqrt(5))/2;"
+    box = np.array(((-2, 2),) * 3, float)
+    fresh = candidate_boxes(Surface.parse(text), box, 7)
+    s = Surface.parse(text)
+    candidate_boxes(s, box, 5)
+    resumed = candidate_boxes(s, box, 7)
+    assert np.array_equal(fresh[0], resumed[0]) and np.array_equal(fresh[1], resumed[1])
+    lo, hi = resumed
+    for p in nodes.true_nodes("barth"):
+        assert np.any(np.all((lo <= p + 1e-12) & (p - 1e-12 <= hi), axis=1)), p
