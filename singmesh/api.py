@@ -77,7 +77,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         is not simple (near singular points, tangencies, thin features).
         Where two isolated singular points are closer than
         ``STAR_MIN_GAP`` such boxes, it is doubled until they are not
-        (each point needs a cube of its own), up to ``2**MAX_LEVEL``;
+        (each point needs a cube of its own), at most ``STAR_MAX_RAISE``
+        times;
         ``Mesh.stats["fine"]`` is the value used.
     **params
         Values of named parameters of the equation.
@@ -216,9 +217,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
 def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> int:
     """The fine level at which no two of ``points`` are closer than ``STAR_MIN_GAP`` cells.
 
-    Measured in the max norm in cells (the stars are lattice cubes), and at
-    most ``MAX_LEVEL``: closer points than that keep sharing (reported as
-    points without a star).
+    Measured in the max norm in cells (the stars are lattice cubes); at most
+    ``STAR_MAX_RAISE`` levels more, and ``MAX_LEVEL``: closer points than
+    that keep sharing (reported as points too close to have a star).
     """
     if len(points) < 2:
         return fine_level
@@ -229,7 +230,7 @@ def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> in
     if gap >= tol.STAR_MIN_GAP:
         return fine_level
     more = int(np.ceil(np.log2(tol.STAR_MIN_GAP / max(gap, 1e-300))))
-    return min(fine_level + more, tol.MAX_LEVEL)
+    return min(fine_level + min(more, tol.STAR_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _short_stars(cycles, stars: dict, expected: list) -> list[int]:

@@ -86,6 +86,12 @@ STAR_RETRIES = 2
 #: fine = 256: pairs 2.3 cells apart, 6 of 92 nodes not vertices).
 STAR_MIN_GAP = 3.0
 
+#: ... at most this many levels finer (16 times): nodes 0.002 apart in
+#: [-1, 1]^3 are meshed at 4096; at 16384 the lattice is finer than the
+#: classifier and the stars were made for (open edges seen), so closer
+#: points keep the lattice and are reported.
+STAR_MAX_RAISE = 4
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8
