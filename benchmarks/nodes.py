@@ -143,7 +143,11 @@ def _labs_septic() -> NodalSurface:
     The text gives al by Cardano's formula; the reference takes the root
     from sympy to 50 digits.  The nodes: one on the axis at (0, 0, -1) and
     14 orbits of 7; the outermost orbit lies at radius 11.75 and height
-    10.52 (all 99 inside [-12, 12]^3; [-6, 6]^3 holds 92).
+    10.52 (all 99 inside [-12, 12]^3; [-6, 6]^3 holds 92).  Nodes of
+    neighbouring orbits near z = -0.5 are 0.11 to 0.21 apart: in [-12, 12]^3
+    that is 1.2 to 2.3 boxes of the point search (level 8), and five nodes
+    of the orbit at radius 0.498, z = -0.5598, are not found there (Newton
+    from their boxes lands on a neighbour; level 9 finds all 99).
     """
     a = sympy.Symbol("a")
     al = sympy.Float(sympy.CRootOf(7 * a**3 + 7 * a + 1, 0).evalf(50), 50)
