@@ -91,13 +91,18 @@ def split(tensors: np.ndarray) -> np.ndarray:
     """
     n = tensors.shape[0]
     n0, n1, n2 = tensors.shape[1:]
-    h = [np.stack(split_matrices(d - 1)).reshape(2 * d, d) for d in (n0, n1, n2)]
+    m = [split_matrices(d - 1) for d in (n0, n1, n2)]
+    out = np.empty((n, 2, 2, 2, n0, n1, n2))
     # One axis at a time as matrix products (BLAS; einsum's batched path
-    # copies and is slower), then the halves moved in front of the tensors.
-    out = np.matmul(h[0], tensors.reshape(n, n0, n1 * n2))  # (N, p a, j k)
-    out = np.matmul(h[1], out.reshape(n * 2 * n0, n1, n2))  # (N p a, q b, k)
-    out = (out.reshape(-1, n2) @ h[2].T).reshape(n, 2, n0, 2, n1, 2, n2)  # (N, p, a, q, b, r, c)
-    return np.ascontiguousarray(out.transpose(0, 1, 3, 5, 2, 4, 6))
+    # copies and is slower).  The last product of each child is written
+    # straight into its place: no transposed copy of all eight at the end.
+    a = np.matmul(np.stack(m[0])[None], tensors.reshape(n, 1, n0, n1 * n2))  # (N, p, a, b c)
+    a = a.reshape(n * 2 * n0, n1, n2)
+    for q in range(2):
+        b = np.matmul(m[1][q], a).reshape(-1, n2)  # (N p a b, c)
+        for r in range(2):
+            out[:, :, q, r] = (b @ m[2][r].T).reshape(n, 2, n0, n1, n2)
+    return out
 
 
 def derivative(tensors: np.ndarray, axis: int) -> np.ndarray:

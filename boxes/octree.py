@@ -182,12 +182,16 @@ def face_without_loops(face: np.ndarray) -> np.ndarray:
 def monotone_axis(tensors: np.ndarray) -> np.ndarray:
     """First axis a for which the box passes the simplicity test, else -1."""
     result = np.full(len(tensors), -1, dtype=np.int64)
-    for a in range(2, -1, -1):
-        mono = sign_definite(derivative(tensors, a), (1, 2, 3))
-        lo = np.take(tensors, 0, axis=1 + a)
-        hi = np.take(tensors, -1, axis=1 + a)
-        ok = mono & face_without_loops(lo) & face_without_loops(hi)
-        result[ok] = a
+    todo = np.arange(len(tensors))
+    for a in range(3):
+        # Each axis only on the boxes no earlier axis passed.
+        t = tensors if len(todo) == len(tensors) else tensors[todo]
+        ok = sign_definite(derivative(t, a), (1, 2, 3))
+        ok[ok] = face_without_loops(np.take(t[ok], 0, axis=1 + a)) & face_without_loops(np.take(t[ok], -1, axis=1 + a))
+        result[todo[ok]] = a
+        todo = todo[~ok]
+        if len(todo) == 0:
+            break
     return result
 
 
@@ -239,13 +243,14 @@ def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=No
     tensors = corner = None
     for level in range(min(start), fine_level + 1):
         if level in start:
+            # Children of split boxes come pruned; boxes starting here not yet.
             t, c = start[level]
+            keep = ~empty_boxes(t)
+            t, c = t[keep], c[keep]
             tensors = t if tensors is None else np.concatenate([tensors, t])
             corner = c if corner is None else np.concatenate([corner, c])
         if tensors is None:
             continue
-        keep = ~empty_boxes(tensors)
-        tensors, corner = tensors[keep], corner[keep]
         if level >= coarse_level:
             # Boxes meeting a region are not simple whatever the test says:
             # the test (the costly part) runs on the others alone.
@@ -269,9 +274,27 @@ def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=No
             break
         half = 1 << (fine_level - level - 1)
         internal.append(node_keys(np.full(len(corner), level), corner >> (fine_level - level)))
-        tensors = split(tensors).reshape((-1,) + tensors.shape[1:])
-        corner = (corner[:, None, :] + half * offsets[None]).reshape(-1, 3)
+        tensors, corner = _split_pruned(tensors, corner, half, offsets)
     return leaves_t, leaves_c, leaves_l, leaves_s, internal
+
+
+def _split_pruned(tensors, corner, half, offsets):
+    """The children of the boxes that may hold a zero of F, with their corners.
+
+    Split ``SPLIT_CHUNK`` boxes at a time and pruned at once: most children
+    of a level are empty, and the whole level's children at once would be
+    gigabytes written to be thrown away.
+    """
+    parts_t, parts_c = [], []
+    for i in range(0, len(tensors), tol.SPLIT_CHUNK):
+        t = split(tensors[i:i + tol.SPLIT_CHUNK]).reshape((-1,) + tensors.shape[1:])
+        c = (corner[i:i + tol.SPLIT_CHUNK, None, :] + half * offsets[None]).reshape(-1, 3)
+        keep = ~empty_boxes(t)
+        parts_t.append(t[keep])
+        parts_c.append(c[keep])
+    if not parts_t:
+        return tensors[:0], corner[:0]
+    return np.concatenate(parts_t), np.concatenate(parts_c)
 
 
 def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
@@ -304,10 +327,22 @@ def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
         fine_level=tree.fine_level,
         level=np.concatenate([tree.level[stay]] + new_l),
         corner=np.concatenate([tree.corner[stay]] + new_c),
-        tensors=np.concatenate([tree.tensors[stay]] + new_t),
+        tensors=_concatenate_kept(tree.tensors, stay, new_t),
         simple=np.concatenate([tree.simple[stay] & ~inside[stay]] + new_s),
         internal=np.sort(np.concatenate([tree.internal] + internal)),
     )
+
+
+def _concatenate_kept(tensors: np.ndarray, keep: np.ndarray, more: list) -> np.ndarray:
+    """``np.concatenate([tensors[keep]] + more)`` with one copy of the kept
+    rows, not two (the leaves' tensors can be most of a gigabyte)."""
+    n = int(keep.sum())
+    out = np.empty((n + sum(len(m) for m in more),) + tensors.shape[1:], tensors.dtype)
+    np.compress(keep, tensors, axis=0, out=out[:n])
+    for m in more:
+        out[n:n + len(m)] = m
+        n += len(m)
+    return out
 
 
 def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,

@@ -7,6 +7,7 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links, leaf_sides
@@ -74,6 +75,11 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     fine : int, power of two, >= coarse
         Boxes per axis at the deepest refinement, used only where a box
         is not simple (near singular points, tangencies, thin features).
+        Where two isolated singular points are closer than
+        ``STAR_MIN_GAP`` such boxes, it is doubled until they are not
+        (each point needs a cube of its own), at most ``STAR_MAX_RAISE``
+        times;
+        ``Mesh.stats["fine"]`` is the value used.
     **params
         Values of named parameters of the equation.
 
@@ -86,6 +92,17 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     SurfaceError
         Bad equation, box or resolution.
     """
+    # The matrix products here are many small ones (Bernstein tensors of a
+    # few hundred coefficients, 4 x 3 Jacobians): BLAS threads only add
+    # hand-offs, and on a machine shared with other work they compete for
+    # the cores (Endrass octic: 32.9 s with two BLAS threads on two cores,
+    # 29.9 s with one).
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _mesh(surface, box, coarse, fine, params)
+
+
+def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
+    """:func:`mesh` itself."""
     t0 = time.perf_counter()
     surf = Surface.parse(surface, **params)
     # F = G^2 H: G = 0 is no sign change; mesh G H and say so.
@@ -109,6 +126,12 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
                                        avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()))
     kinds = [sp.classification for sp in points]
     t_sing = time.perf_counter() - t_sing
+    if not len(curves.points):
+        # Each point needs a star cube of its own on the fine lattice:
+        # points a cell or two apart would share one (and lose their
+        # stars), so the lattice is made finer until they are not.
+        fine_level = _fine_for_points(np.array([sp.point for sp in points]).reshape(-1, 3), b, fine_level)
+        cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
     # First pass: the boxes at each singular point, and along each curve
     # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
@@ -178,6 +201,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         "untraced_curve": bool(overflow),
         "repeated_factors": repeated,
         "overlapping_stars": len(clashes),
+        "fine": 1 << fine_level,
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
@@ -186,8 +210,27 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
-        warnings.warn(note, SingularPointWarning, stacklevel=2)
+        warnings.warn(note, SingularPointWarning, stacklevel=3)
     return m
+
+
+def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> int:
+    """The fine level at which no two of ``points`` are closer than ``STAR_MIN_GAP`` cells.
+
+    Measured in the max norm in cells (the stars are lattice cubes); at most
+    ``STAR_MAX_RAISE`` levels more, and ``MAX_LEVEL``: closer points than
+    that keep sharing (reported as points too close to have a star).
+    """
+    if len(points) < 2:
+        return fine_level
+    from scipy.spatial import cKDTree
+
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    gap = float(cKDTree(points / cell).query(points / cell, k=2, p=np.inf)[0][:, 1].min())
+    if gap >= tol.STAR_MIN_GAP:
+        return fine_level
+    more = int(np.ceil(np.log2(tol.STAR_MIN_GAP / max(gap, 1e-300))))
+    return min(fine_level + min(more, tol.STAR_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _short_stars(cycles, stars: dict, expected: list) -> list[int]:

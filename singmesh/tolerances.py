@@ -79,6 +79,19 @@ STAR_REACH = 1 / 8
 #: and meshed again (its cube was larger than the cone it must hold).
 STAR_RETRIES = 2
 
+#: Isolated singular points closer than this many fine cells (max norm)
+#: make the fine lattice finer: star cubes reach a cell beyond their
+#: point, rounded outwards, so points two or three cells apart get
+#: overlapping cubes and lose their stars (Labs' septic in [-6, 6]^3 at
+#: fine = 256: pairs 2.3 cells apart, 6 of 92 nodes not vertices).
+STAR_MIN_GAP = 3.0
+
+#: ... at most this many levels finer (16 times): nodes 0.002 apart in
+#: [-1, 1]^3 are meshed at 4096; at 16384 the lattice is finer than the
+#: classifier and the stars were made for (open edges seen), so closer
+#: points keep the lattice and are reported.
+STAR_MAX_RAISE = 4
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8
@@ -145,9 +158,20 @@ NEWTON_STILL = 4 * 2.0 ** -52
 #: below what the input's rounding allows, whichever is larger).
 SINGULAR_RESIDUAL = 1e-12
 
+#: The candidate boxes a search ends with are kept (tensors and all), for
+#: a deeper search of the same surface to go on from, up to this size: the
+#: curve search's level-6 boxes of a surface with hundreds of nodes are
+#: tens of MB, and the point search at level 8 then skips six levels.
+CANDIDATE_KEEP_BYTES = 64 * 2**20
+
 #: Candidate boxes of the singular-point search are split at most this
-#: many at a time (memory: four Bernstein tensors each, 8 children).
-CANDIDATE_CHUNK = 2048
+#: many at a time (memory: four Bernstein tensors each, 8 children; a
+#: few MB of children at a time stay in cache, ten times that do not).
+CANDIDATE_CHUNK = 256
+
+#: Boxes of the subdivision are split this many at a time, and their empty
+#: children dropped at once (a whole level's children can be gigabytes).
+SPLIT_CHUNK = 256
 
 #: Candidate boxes of the singular-point search in a connected clump this
 #: many boxes long may lie on a curve of singular points; CURVE_SAMPLES

@@ -17,6 +17,8 @@
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -28,6 +30,11 @@ from singmesh.surface import Surface
 from .centre import centre, residual
 from .classify import NotSingularError
 from .points import SingularPoint
+
+
+#: Per surface (while it lives): the last candidate boxes of each box and
+#: axes searched, with their tensors, for a deeper search to go on from.
+_KEPT: "weakref.WeakKeyDictionary[Surface, dict]" = weakref.WeakKeyDictionary()
 
 
 def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2)):
@@ -50,6 +57,14 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
     # split plane): tiny next to the box's own coefficients at depth.
     dust = tol.CANDIDATE_DUST * float(np.abs(root).max())
     todo = [(root, np.zeros((1, 3), np.int64), 0)]
+    key = (np.asarray(box, dtype=float).tobytes(), tuple(axes))
+    kept = _KEPT.get(surface, {})
+    if key in kept and kept[key][0] <= level:
+        # The boxes an earlier, shallower search of the same surface and box
+        # ended with (the curve search's): the deeper one goes on from them.
+        todo = [(kept[key][1], kept[key][2], kept[key][0])]
+        del kept[key]
+    ends = []
     out = []
     offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
     while todo:
@@ -73,6 +88,7 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
             continue
         if lvl == level:
             out.append(corner)
+            ends.append(t)
             continue
         for part in range(0, len(corner), tol.CANDIDATE_CHUNK):
             sl = slice(part, part + tol.CANDIDATE_CHUNK)
@@ -80,6 +96,8 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
                          (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
     if not out:
         return np.zeros((0, 3)), np.zeros((0, 3))
+    if sum(t.nbytes for t in ends) <= tol.CANDIDATE_KEEP_BYTES:
+        _KEPT.setdefault(surface, {})[key] = (level, np.concatenate(ends), np.concatenate(out))
     corner = np.concatenate(out)
     corner = corner[np.lexsort(corner.T[::-1])]
     return _corners(box, corner, level)

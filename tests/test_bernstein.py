@@ -77,3 +77,33 @@ def test_evaluate_1d():
     i = np.arange(n + 1)
     direct = (b * comb(n, i) * t[:, None] ** i * (1 - t[:, None]) ** (n - i)).sum(axis=1)
     assert np.allclose(evaluate_1d(b, t), direct, atol=1e-13)
+
+
+def test_simplicity_axis_is_the_first_that_passes():
+    """monotone_axis skips axes on boxes an earlier one passed: the answer
+    is still the first axis (in 0, 1, 2) whose derivative has one sign and
+    whose two end faces hold no closed curve, checked here box by box."""
+    from singmesh.boxes.octree import monotone_axis
+
+    def one_sign(c):
+        return (c.min() >= 0 and c.max() > 0) or (c.max() <= 0 and c.min() < 0)
+
+    def no_loop(face):
+        return (one_sign(np.diff(face, axis=0)) or one_sign(np.diff(face, axis=1))
+                or face.min() >= 0 or face.max() < 0)
+
+    rng = np.random.default_rng(11)
+    # Tensors that pass on various axes: a ramp along a random axis plus noise.
+    tensors = rng.normal(size=(400, 4, 3, 5)) * rng.choice([0.05, 1.0], size=(400, 1, 1, 1))
+    ramp = [np.arange(n)[tuple(slice(None) if b == a else None for b in range(3))] for a, n in enumerate((4, 3, 5))]
+    for m in range(len(tensors)):
+        tensors[m] += ramp[rng.integers(3)] - 1.0
+    got = monotone_axis(tensors)
+    want = np.full(len(tensors), -1)
+    for m, t in enumerate(tensors):
+        for a in range(3):
+            if one_sign(np.diff(t, axis=a)) and no_loop(np.take(t, 0, axis=a)) and no_loop(np.take(t, -1, axis=a)):
+                want[m] = a
+                break
+    assert np.array_equal(got, want)
+    assert {0, 1, 2, -1} <= set(want.tolist())  # every outcome is exercised

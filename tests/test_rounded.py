@@ -186,17 +186,34 @@ def test_cubic_types_agree_with_singular(text, name, branches):
 
 # ------------------------------------------------------------------ no silent loss
 def test_points_too_close_for_stars_are_said():
-    # Two nodes 0.002 apart, inside one fine cell: both found, one without
-    # a star; the report and a warning say so.
+    # Two nodes 0.0004 apart: within one cell even of the finest lattice the
+    # stars may ask for (fine 256 made 16 times finer): both found, one
+    # without a star; the report and a warning say so.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        m = singmesh.mesh("x^2 + y^2 - (z^2 - 0.001^2)^2", BOX1)
+        m = singmesh.mesh("x^2 + y^2 - (z^2 - 0.0002^2)^2", BOX1)
     pts = sorted(s.point[2] for s in m.singularities)
-    assert np.allclose(pts, [-0.001, 0.001], atol=1e-12)
+    assert np.allclose(pts, [-0.0002, 0.0002], atol=1e-12)
     messages = [str(w.message) for w in caught if issubclass(w.category, singmesh.SingularPointWarning)]
     assert len(messages) == 1 and "not mesh vertices" in messages[0] and "too close" in messages[0]
     assert any("not mesh vertices" in n for n in m.notes())
     assert "not mesh vertices" in m.report_text()
+
+
+def test_points_a_quarter_cell_apart_get_a_finer_lattice():
+    # Two nodes 0.002 apart, inside one fine cell at fine = 256: the lattice
+    # is made finer (4096) and both are vertices with their two cones.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", singmesh.SingularPointWarning)
+        m = singmesh.mesh("x^2 + y^2 - (z^2 - 0.001^2)^2", BOX1)
+    assert m.stats["fine"] == 4096
+    assert sorted(s.point[2] for s in m.singularities) == pytest.approx([-0.001, 0.001], abs=1e-12)
+    assert not mc.non_manifold_edges(m.faces)
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(BOX1, float)) == []
+    for z in (-0.001, 0.001):
+        i = int(np.argmin(np.linalg.norm(m.vertices - [0, 0, z], axis=1)))
+        assert np.abs(m.vertices[i] - [0, 0, z]).max() <= 1e-12
+        assert mc.fans_at(m.faces, i) == 2
 
 
 def test_no_warning_when_every_point_is_meshed():

@@ -232,3 +232,46 @@ def test_skeleton_nodes_against_sympy():
     assert len(got) == len(truth) == 2
     for p in truth:
         assert np.abs(got - p).max(axis=1).min() <= 1e-10
+
+
+def test_deeper_candidate_search_goes_on_from_the_kept_boxes():
+    """The point search (level 8) starts from the boxes the curve search
+    (level 6) ended with on the same surface: the same boxes as a search
+    from the whole box, on a fresh parse, and each true node is in one."""
+    from benchmarks import nodes
+
+    from singmesh.skeleton.singular import candidate_boxes
+
+    text = "4(t^2 x^2-y^2)(t^2 y^2-z^2)(t^2 z^2-x^2) - (1+2t)(x^2+y^2+z^2-1)^2; t = (1+sqrt(5))/2;"
+    box = np.array(((-2, 2),) * 3, float)
+    fresh = candidate_boxes(Surface.parse(text), box, 7)
+    s = Surface.parse(text)
+    candidate_boxes(s, box, 5)
+    resumed = candidate_boxes(s, box, 7)
+    assert np.array_equal(fresh[0], resumed[0]) and np.array_equal(fresh[1], resumed[1])
+    lo, hi = resumed
+    for p in nodes.true_nodes("barth"):
+        assert np.any(np.all((lo <= p + 1e-12) & (p - 1e-12 <= hi), axis=1)), p
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_two_nodes_two_fine_cells_apart_both_have_stars(seed):
+    """(u^2 - a^2)^2 + a^2 (v^2 - w^2) in a float rotated frame (15 digits):
+    nodes at u = +-a, v = w = 0, here 1.6 and 1.8 fine cells apart at the
+    defaults.  Their star cubes overlapped, and one node was no vertex;
+    the fine lattice is made finer until they are three cells apart."""
+    a, centre = 0.02, np.array([0.1234, -0.2345, 0.0567])
+    q, _ = np.linalg.qr(np.random.default_rng(seed).standard_normal((3, 3)))
+    u, v, w = sympy.Matrix(q.tolist()) * sympy.Matrix([X - centre[0], Y - centre[1], Z - centre[2]])
+    e = sympy.expand((u**2 - a**2) ** 2 + a**2 * (v**2 - w**2))
+    text = " + ".join(f"({float(c):.15g})*" + "*".join(f"{s}^{k}" for s, k in zip("xyz", m) if k)
+                      if any(m) else f"({float(c):.15g})" for m, c in sympy.Poly(e, X, Y, Z).terms())
+    nodes = [centre + sgn * a * q[0] for sgn in (1, -1)]
+    box = ((-2, 2),) * 3
+    gap = np.abs(nodes[0] - nodes[1]).max() / (4 / 256)
+    assert 1.5 < gap < 2  # the case: closer than the stars' reach at fine = 256
+    m = singmesh.mesh(text, box)
+    assert len(m.singularities) == 2
+    f = numpy_f(Surface.parse(text).expr)
+    for p in nodes:
+        check_singular_mesh(m, p, 2, box, f)
