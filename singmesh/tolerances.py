@@ -38,9 +38,11 @@ SNAP_LATTICE = 1e-6
 #: lattice point shares its vertex with the roots of the other lines through
 #: that point (placed on the surface).  Apart, they would be vertices a hair
 #: apart with triangles of no area between them (a thin cusp, a sheet
-#: grazing a lattice point).  The size of ROOT_CLUSTER, the distance below
-#: which two roots on one line are one vertex already.
-SNAP_DISTANCE = 1e-7
+#: grazing a lattice point).  Roots this far from the point on three lines
+#: through it span a triangle of about 0.9e-12 of the box squared, well
+#: above the 1e-14 that counts as no area; at 1e-7 (ROOT_CLUSTER's size) a
+#: sheet grazing a corner of a float-rotated A4 form left one of 3e-14.
+SNAP_DISTANCE = 1e-6
 
 #: Roots of the restriction of F to a lattice line: eigenvalues whose
 #: imaginary part is below this (relative to the line's length scale) are

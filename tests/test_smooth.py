@@ -117,6 +117,23 @@ def test_surface_containing_split_planes():
         m.vertices[m.faces[:, 2]] - m.vertices[m.faces[:, 0]]), axis=1)), 4.0)
 
 
+@pytest.mark.parametrize("offset", ["0.00000125", "0.0000015525", "0.0000018", "0.0000025"])
+def test_sheet_grazing_a_lattice_point_leaves_no_zero_area_triangle(offset):
+    # A sphere of radius ~1 passing 1e-7 to 4e-7 of the box from the lattice
+    # point at the origin, cutting the three axes at different distances:
+    # the roots on the three lattice lines through the point span a
+    # triangle of about 1e-14 of the box squared unless they share a vertex.
+    text = f"6.75 x + 6.21 y + 5.75 z + 0.5 (x^2+y^2+z^2) - {offset}"
+    box = ((-1, 1),) * 3
+    m = singmesh.mesh(text, box)
+    assert mc.tiny_triangles(m.vertices, m.faces, box) == 0
+    assert mc.close_vertex_pairs(m.vertices, box) == 0
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, box) == []
+    assert mc.non_manifold_edges(m.faces) == []
+    f = F(f"6.75*x + 6.21*y + 5.75*z + 0.5*(x**2+y**2+z**2) - {offset}")
+    assert np.abs(f(m.vertices)).max() < 1e-9   # |grad F| is about 11 here
+
+
 def test_deterministic():
     a = singmesh.mesh("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3, 3),) * 3, coarse=16)
     b = singmesh.mesh("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3, 3),) * 3, coarse=16)
