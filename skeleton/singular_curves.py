@@ -1165,11 +1165,6 @@ def _place_changes(surface: Surface, P: np.ndarray, jobs: list, step: float) -> 
     P[v] = _type_changes(surface, P[a], P[b], [j[3] for j in jobs], [j[4] for j in jobs], step)
 
 
-def _type_change(surface: Surface, a: np.ndarray, b: np.ndarray, name_a: str, name_b: str, step: float) -> np.ndarray:
-    """Where the transversal type changes between two vertices of a curve: bisection."""
-    return _type_changes(surface, a[None], b[None], [name_a], [name_b], step)[0]
-
-
 def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list, names_b: list,
                   step: float) -> np.ndarray:
     """Where the transversal type changes between a[i] and b[i] (k, 3), by bisection, all at once.
