@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bernstein import sign_definite
 from .edges import Events
 from .octree import Octree, node_keys
 
@@ -90,28 +89,22 @@ def contact_squares(tree: Octree):
     return rows[first], owners[first], sides[first]
 
 
-def _face_coefficients(tree: Octree, owner, owner_side, n):
-    """Bernstein coefficients of F on squares, axes ordered (u, v)."""
-    # Gather the face's slice only, not the owner's whole tensor.
-    index = [owner, slice(None), slice(None), slice(None)]
-    index[1 + n] = np.where(owner_side == 1, tree.tensors.shape[1 + n] - 1, 0)
-    face = tree.tensors[tuple(index)]
-    if n == 1:  # the remaining axes are (x, z) = (v, u)
-        face = np.swapaxes(face, 1, 2)
-    return face
+def graph_modes(surface, tree: Octree, squares, owner, owner_side) -> np.ndarray:
+    """0: the face curve is a graph over u; 1: over v; 2: neither is known.
 
-
-def graph_modes(tree: Octree, squares, owner, owner_side) -> np.ndarray:
-    """0: the face curve is a graph over u; 1: over v; 2: neither is known."""
+    Read from the owner's face by ``surface.face_modes``: on the whole
+    ``tree.data`` (each leaf owns at most one square per face), not on a
+    gathered copy of the owners' data.
+    """
     mode = np.full(len(squares), 2, np.int64)
+    n_leaves = len(tree.level)
     for a in range(3):
-        sel = np.nonzero(squares[:, 0] == a)[0]
-        if len(sel) == 0:
-            continue
-        face = _face_coefficients(tree, owner[sel], owner_side[sel], a)
-        over_u = sign_definite(np.diff(face, axis=2), (1, 2))  # F_v of one sign
-        over_v = sign_definite(np.diff(face, axis=1), (1, 2))  # F_u of one sign
-        mode[sel] = np.where(over_u, 0, np.where(over_v, 1, 2))
+        for side in (0, 1):
+            sel = np.nonzero((squares[:, 0] == a) & (owner_side == side))[0]
+            if len(sel) == 0:
+                continue
+            modes = surface.face_modes(tree.data, a, np.full(n_leaves, side, np.int64))
+            mode[sel] = modes[owner[sel]]
     return mode
 
 
@@ -187,10 +180,10 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     return sq[a], start, end, bad
 
 
-def face_links(tree: Octree, events: Events) -> FaceLinks:
-    """Pair the events on every contact square into oriented links."""
+def face_links(surface, tree: Octree, events: Events) -> FaceLinks:
+    """Pair the events on every contact square into oriented links (``tree`` made for ``surface``)."""
     squares, owner, owner_side = contact_squares(tree)
-    mode = graph_modes(tree, squares, owner, owner_side)
+    mode = graph_modes(surface, tree, squares, owner, owner_side)
     inc = square_events(events, squares)
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     # A graph pairing that does not alternate start/end means rounding

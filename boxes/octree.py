@@ -4,19 +4,18 @@ Boxes are addressed on the integer lattice of the finest level: a box at
 ``level`` has its lower corner at ``corner`` (lattice units) and side
 ``2**(fine_level - level)``.  Exact zeros follow one rule everywhere
 (simulation of simplicity): F is meshed as if it were F + eps for an
-infinitesimal eps > 0.  A box is pruned only when its coefficients are
-all clearly positive or all clearly negative (beyond rounding): then F has
-no zero in it at all, and no event can lie on its boundary.
+infinitesimal eps > 0.  A box is pruned only when the surface says F has
+no zero in it at all (beyond rounding: ``Surface.excludes_zero``), so no
+event can lie on its boundary.
+
+The octree knows F only through the surface interface
+(:class:`singmesh.surface.Surface`): ``enclose`` gives the root's ``data``,
+``split`` its children's, ``excludes_zero`` prunes and ``simple_axis``
+stops the refinement.  The stacks of ``data`` are opaque: they are only
+indexed, concatenated and kept per leaf.
 
 A box is *simple* when the surface in it is a union of discs, each bounded
-by one cycle of face links.  The test used: some partial derivative F_a is
-of one sign on the box (so each line parallel to axis a meets the surface
-at most once and the surface is a graph over the faces normal to a), and on
-both faces normal to a the face curve has no closed loop (a tangential
-derivative of one sign there, or no curve at all).  A hole in the graph's
-domain would be bounded by a closed loop of the top or bottom face curve,
-because the two face curves cannot cross when F is monotone along a;
-excluding such loops leaves discs.
+by one cycle of face links (see ``Surface.simple_axis``).
 """
 
 from __future__ import annotations
@@ -27,7 +26,6 @@ import numpy as np
 
 from singmesh import tolerances as tol
 
-from .bernstein import bernstein_on_box, derivative, sign_definite, split
 
 #: Bits per lattice coordinate and the shift of the level in a node key.
 _BITS = 16
@@ -58,8 +56,9 @@ class Octree:
         Level of each leaf.
     corner : (N, 3) int64
         Lower corner of each leaf in lattice units.
-    tensors : (N, n0+1, n1+1, n2+1) float64
-        Bernstein coefficients of F on each leaf.
+    data : (N, ...) float64
+        The surface's bounds ``data`` on each leaf (``Surface.enclose``):
+        for a polynomial its Bernstein tensors.
     simple : (N,) bool
         Whether the leaf passed the simplicity test.
     internal : (M,) int64, sorted
@@ -70,7 +69,7 @@ class Octree:
     fine_level: int
     level: np.ndarray
     corner: np.ndarray
-    tensors: np.ndarray
+    data: np.ndarray
     simple: np.ndarray
     internal: np.ndarray
 
@@ -153,48 +152,6 @@ def star(tree: Octree, point: np.ndarray, rel: float = 1e-9) -> np.ndarray:
     return containing_leaves(tree, point, rel)[1]
 
 
-def empty_boxes(tensors: np.ndarray) -> np.ndarray:
-    """Boxes where F certainly has no zero: all coefficients > slack, or all < -slack.
-
-    The slack (``PRUNE_SLACK`` of the largest coefficient) keeps boxes where
-    F may vanish up to rounding, e.g. exactly at a corner: pruning such a
-    box would leave a hole in the faces that carry the events found there.
-    """
-    flat = tensors.reshape(len(tensors), -1)
-    slack = tol.PRUNE_SLACK * np.abs(flat).max(axis=1)
-    return (flat.min(axis=1) > slack) | (flat.max(axis=1) < -slack)
-
-
-def face_without_loops(face: np.ndarray) -> np.ndarray:
-    """Whether the curve F + eps = 0 on stacked faces (N, a, b) has no closed loop.
-
-    True when a tangential derivative is of one sign (the curve is a graph)
-    or when there is no curve at all.
-    """
-    return (
-        sign_definite(np.diff(face, axis=1), (1, 2))
-        | sign_definite(np.diff(face, axis=2), (1, 2))
-        | (face.min(axis=(1, 2)) >= 0)
-        | (face.max(axis=(1, 2)) < 0)
-    )
-
-
-def monotone_axis(tensors: np.ndarray) -> np.ndarray:
-    """First axis a for which the box passes the simplicity test, else -1."""
-    result = np.full(len(tensors), -1, dtype=np.int64)
-    todo = np.arange(len(tensors))
-    for a in range(3):
-        # Each axis only on the boxes no earlier axis passed.
-        t = tensors if len(todo) == len(tensors) else tensors[todo]
-        ok = sign_definite(derivative(t, a), (1, 2, 3))
-        ok[ok] = face_without_loops(np.take(t[ok], 0, axis=1 + a)) & face_without_loops(np.take(t[ok], -1, axis=1 + a))
-        result[todo[ok]] = a
-        todo = todo[~ok]
-        if len(todo) == 0:
-            break
-    return result
-
-
 def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     """Whether each box meets, and whether it lies inside, one of ``regions``.
 
@@ -231,25 +188,25 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     return meets, inside
 
 
-def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None):
-    """Subdivide boxes level by level from ``frontier`` [(level, tensors, corners), ...].
+def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None):
+    """Subdivide boxes level by level from ``frontier`` [(level, data, corners), ...].
 
-    Returns the leaves (lists of tensors, corners, levels, simple flags) and
+    Returns the leaves (lists of data, corners, levels, simple flags) and
     the keys of the nodes split, in the form :func:`subdivide` assembles.
     """
-    leaves_t, leaves_c, leaves_l, leaves_s, internal = [], [], [], [], []
-    start = {lvl: (t, c) for lvl, t, c in frontier}
+    leaves_d, leaves_c, leaves_l, leaves_s, internal = [], [], [], [], []
+    start = {lvl: (d, c) for lvl, d, c in frontier}
     offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
-    tensors = corner = None
+    data = corner = None
     for level in range(min(start), fine_level + 1):
         if level in start:
             # Children of split boxes come pruned; boxes starting here not yet.
-            t, c = start[level]
-            keep = ~empty_boxes(t)
-            t, c = t[keep], c[keep]
-            tensors = t if tensors is None else np.concatenate([tensors, t])
+            d, c = start[level]
+            keep = ~surface.excludes_zero(d)
+            d, c = d[keep], c[keep]
+            data = d if data is None else np.concatenate([data, d])
             corner = c if corner is None else np.concatenate([corner, c])
-        if tensors is None:
+        if data is None:
             continue
         if level >= coarse_level:
             # Boxes meeting a region are not simple whatever the test says:
@@ -263,47 +220,49 @@ def _grow(frontier, box, coarse_level, fine_level, keep_splitting=None, stars=No
                 forced |= in_star | meets
             simple = np.zeros(len(corner), bool)
             test = np.nonzero(~forced)[0]
-            simple[test] = monotone_axis(tensors[test]) >= 0
+            simple[test] = surface.simple_axis(data[test]) >= 0
             stop = simple | in_star | (level == fine_level)
-            leaves_t.append(tensors[stop])
+            leaves_d.append(data[stop])
             leaves_c.append(corner[stop])
             leaves_l.append(np.full(int(stop.sum()), level, dtype=np.int64))
             leaves_s.append(simple[stop])
-            tensors, corner = tensors[~stop], corner[~stop]
-        if level == fine_level or (len(tensors) == 0 and not any(k > level for k in start)):
+            data, corner = data[~stop], corner[~stop]
+        if level == fine_level or (len(data) == 0 and not any(k > level for k in start)):
             break
         half = 1 << (fine_level - level - 1)
         internal.append(node_keys(np.full(len(corner), level), corner >> (fine_level - level)))
-        tensors, corner = _split_pruned(tensors, corner, half, offsets)
-    return leaves_t, leaves_c, leaves_l, leaves_s, internal
+        data, corner = _split_pruned(surface, data, corner, half, offsets)
+    return leaves_d, leaves_c, leaves_l, leaves_s, internal
 
 
-def _split_pruned(tensors, corner, half, offsets):
+def _split_pruned(surface, data, corner, half, offsets):
     """The children of the boxes that may hold a zero of F, with their corners.
 
     Split ``SPLIT_CHUNK`` boxes at a time and pruned at once: most children
     of a level are empty, and the whole level's children at once would be
     gigabytes written to be thrown away.
     """
-    parts_t, parts_c = [], []
-    for i in range(0, len(tensors), tol.SPLIT_CHUNK):
-        t = split(tensors[i:i + tol.SPLIT_CHUNK]).reshape((-1,) + tensors.shape[1:])
+    parts_d, parts_c = [], []
+    for i in range(0, len(data), tol.SPLIT_CHUNK):
+        d = surface.split(data[i:i + tol.SPLIT_CHUNK])  # (n, 8, ...)
+        d = d.reshape((-1,) + d.shape[2:])
         c = (corner[i:i + tol.SPLIT_CHUNK, None, :] + half * offsets[None]).reshape(-1, 3)
-        keep = ~empty_boxes(t)
-        parts_t.append(t[keep])
+        keep = ~surface.excludes_zero(d)
+        parts_d.append(d[keep])
         parts_c.append(c[keep])
-    if not parts_t:
-        return tensors[:0], corner[:0]
-    return np.concatenate(parts_t), np.concatenate(parts_c)
+    if not parts_d:
+        return data[:0], corner[:0]
+    return np.concatenate(parts_d), np.concatenate(parts_c)
 
 
-def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
+def refine_stars(surface, tree: Octree, stars: np.ndarray) -> Octree:
     """``tree`` with the leaves meeting the star regions split to the fine level.
 
     Leaves inside a star and leaves away from all stars stay as they are
     (what :func:`subdivide` would make of them again); only those meeting
-    a star's boundary are split, from their own tensors, so that the star's
+    a star's boundary are split, from their own ``data``, so that the star's
     boundary is tiled by fine faces.  Inside leaves are flagged not simple.
+    ``surface`` is the one ``tree`` was made for.
     """
     if stars is None or len(stars) == 0:
         return tree
@@ -315,39 +274,39 @@ def refine_stars(tree: Octree, stars: np.ndarray) -> Octree:
     grow = touch & ~inside & (tree.level < tree.fine_level)
     if not grow.any():
         simple = tree.simple & ~inside
-        return Octree(tree.box, tree.fine_level, tree.level, tree.corner, tree.tensors, simple, tree.internal)
-    frontier = [(lvl, tree.tensors[grow & (tree.level == lvl)], tree.corner[grow & (tree.level == lvl)])
+        return Octree(tree.box, tree.fine_level, tree.level, tree.corner, tree.data, simple, tree.internal)
+    frontier = [(lvl, tree.data[grow & (tree.level == lvl)], tree.corner[grow & (tree.level == lvl)])
                 for lvl in np.unique(tree.level[grow]).tolist()]
     # Split what is grown (its own level is below the coarse level only if
     # the tree was never subdivided there: no such leaves exist).
-    new_t, new_c, new_l, new_s, internal = _grow(frontier, tree.box, 0, tree.fine_level, stars=stars)
+    new_d, new_c, new_l, new_s, internal = _grow(surface, frontier, tree.box, 0, tree.fine_level, stars=stars)
     stay = ~grow
     return Octree(
         box=tree.box,
         fine_level=tree.fine_level,
         level=np.concatenate([tree.level[stay]] + new_l),
         corner=np.concatenate([tree.corner[stay]] + new_c),
-        tensors=_concatenate_kept(tree.tensors, stay, new_t),
+        data=_concatenate_kept(tree.data, stay, new_d),
         simple=np.concatenate([tree.simple[stay] & ~inside[stay]] + new_s),
         internal=np.sort(np.concatenate([tree.internal] + internal)),
     )
 
 
-def _concatenate_kept(tensors: np.ndarray, keep: np.ndarray, more: list) -> np.ndarray:
-    """``np.concatenate([tensors[keep]] + more)`` with one copy of the kept
-    rows, not two (the leaves' tensors can be most of a gigabyte)."""
+def _concatenate_kept(data: np.ndarray, keep: np.ndarray, more: list) -> np.ndarray:
+    """``np.concatenate([data[keep]] + more)`` with one copy of the kept
+    rows, not two (the leaves' data can be most of a gigabyte)."""
     n = int(keep.sum())
-    out = np.empty((n + sum(len(m) for m in more),) + tensors.shape[1:], tensors.dtype)
-    np.compress(keep, tensors, axis=0, out=out[:n])
+    out = np.empty((n + sum(len(m) for m in more),) + data.shape[1:], data.dtype)
+    np.compress(keep, data, axis=0, out=out[:n])
     for m in more:
         out[n:n + len(m)] = m
         n += len(m)
     return out
 
 
-def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
+def subdivide(surface, box, coarse_level: int, fine_level: int,
               keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None) -> Octree:
-    """Subdivide ``box`` for the polynomial with monomial tensor ``coeffs``.
+    """Subdivide ``box`` for the surface F = 0.
 
     Every box is split down to ``coarse_level``; below it only boxes that
     are not simple are split, down to ``fine_level``.  Empty boxes are
@@ -355,7 +314,9 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
 
     Parameters
     ----------
-    coeffs : (n0+1, n1+1, n2+1) ndarray
+    surface : Surface
+        F, through its bounds on boxes (``enclose``, ``split``,
+        ``excludes_zero``, ``simple_axis``).
     box : (3, 2) array_like
     coarse_level, fine_level : int
         ``0 <= coarse_level <= fine_level``.
@@ -375,17 +336,17 @@ def subdivide(coeffs: np.ndarray, box, coarse_level: int, fine_level: int,
     Octree
     """
     box = np.asarray(box, dtype=float)
-    frontier = [(0, bernstein_on_box(coeffs, box)[None], np.zeros((1, 3), dtype=np.int64))]
-    leaves_t, leaves_c, leaves_l, leaves_s, internal = _grow(
-        frontier, box, coarse_level, fine_level, keep_splitting, stars)
-    shape = (0,) + tuple(s for s in coeffs.shape)
+    root = surface.enclose(box)
+    frontier = [(0, root, np.zeros((1, 3), dtype=np.int64))]
+    leaves_d, leaves_c, leaves_l, leaves_s, internal = _grow(
+        surface, frontier, box, coarse_level, fine_level, keep_splitting, stars)
     cat = lambda parts, empty: np.concatenate(parts) if parts else empty  # noqa: E731
     return Octree(
         box=box,
         fine_level=fine_level,
         level=cat(leaves_l, np.zeros(0, np.int64)),
         corner=cat(leaves_c, np.zeros((0, 3), np.int64)),
-        tensors=cat(leaves_t, np.zeros(shape)),
+        data=cat(leaves_d, root[:0]),
         simple=cat(leaves_s, np.zeros(0, bool)),
         internal=np.sort(cat(internal, np.zeros(0, np.int64))),
     )

@@ -136,7 +136,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
     keep = np.concatenate([cubes, tube_regions(b, fine_level, curves)]) if len(curves.points) else cubes
-    tree = subdivide(surf.coeffs, b, coarse_level, fine_level, keep_splitting=keep)
+    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep)
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
@@ -146,16 +146,16 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     else:
         cubes = None
         events = compute_events(surf, tree)
-        links = face_links(tree, events)
+        links = face_links(surf, tree, events)
     first = tree
     for attempt in range(tol.STAR_RETRIES + 1):
         if cubes is not None:
             # Second pass: each star becomes a cube around its point, large
             # enough to hold the boxes that failed the simplicity test
             # there; the leaves meeting its boundary go to the fine level.
-            tree = refine_stars(first, cubes)
+            tree = refine_stars(surf, first, cubes)
             events = compute_events(surf, tree)
-            links = face_links(tree, events)
+            links = face_links(surf, tree, events)
         group, stars, clashes = group_stars(tree, cubes, centres)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import sympy
 
 from . import tolerances as tol
-from .surface import VARIABLES, Surface
+from .surface import VARIABLES, PolynomialSurface, Surface
 
 
 def squarefree(surface: Surface) -> tuple[Surface, list[tuple[str, int]]]:
@@ -27,6 +27,8 @@ def squarefree(surface: Surface) -> tuple[Surface, list[tuple[str, int]]]:
     repeated : list of (factor, multiplicity)
         The factors of multiplicity > 1, as text.
     """
+    if not surface.is_polynomial:
+        return surface, []
     poly = sympy.Poly(surface.expr, *VARIABLES)
     if poly.domain not in (sympy.ZZ, sympy.QQ) or len(poly.terms()) > tol.SQUAREFREE_MAX_TERMS:
         return surface, []
@@ -35,7 +37,7 @@ def squarefree(surface: Surface) -> tuple[Surface, list[tuple[str, int]]]:
     if not repeated:
         return surface, []
     part = sympy.Mul(*[f.as_expr() for f, _ in factors])
-    reduced = Surface._from_expr(sympy.expand(part), f"squarefree part of {surface.text}", {},
-                                 surface.rounding)
-    return Surface(text=surface.text, expr=reduced.expr, coeffs=reduced.coeffs, degree=reduced.degree,
-                   params=surface.params, rounding=surface.rounding), repeated
+    reduced = PolynomialSurface._from_expr(sympy.expand(part), f"squarefree part of {surface.text}", {},
+                                           surface.rounding)
+    return PolynomialSurface(text=surface.text, expr=reduced.expr, coeffs=reduced.coeffs, degree=reduced.degree,
+                             params=surface.params, rounding=surface.rounding), repeated

@@ -1,4 +1,4 @@
-"""A surface equation as a polynomial F(x, y, z), and its evaluation.
+"""A surface equation F(x, y, z) = 0: the interface the stages use, and the polynomial.
 
 The text is read by :mod:`singmesh.syntax` (SingSurf's equation language,
 which also takes sympy's syntax): ``^`` for powers, implicit
@@ -8,111 +8,238 @@ statements over several lines with ``//`` comments, and later
 and each other.  Parameters may also come as keyword arguments.  Constant
 subexpressions such as ``sqrt(5)``, ``pi`` or ``cos(2 pi/5)`` are numbers.
 
-The result, :class:`Surface`, holds the exact sympy polynomial, the dense
-tensor of its monomial coefficients ``C[i, j, k]`` (the coefficient of
-``x**i y**j z**k``) and the tensors of its first and second derivatives,
-and evaluates all of them at points.
+:class:`Surface` is what every stage knows of F (issue #10): values and
+Taylor jets at points, bounds on stacked boxes (an opaque ``data`` array
+per stack, first axis the box) and roots on lattice segments.
+:class:`PolynomialSurface` implements it for a polynomial: the exact sympy
+polynomial, the dense tensor of its monomial coefficients ``C[i, j, k]``
+(of ``x**i y**j z**k``) for values at points, Bernstein tensors on boxes
+(:mod:`singmesh.boxes.polynomial_bounds`) and companion matrices on lines
+(:mod:`singmesh.boxes.polynomial_lines`).
 """
 
 from __future__ import annotations
 
+import abc
+import itertools
+import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 import sympy
 
+from singmesh.boxes import polynomial_bounds, polynomial_lines
+from singmesh.boxes.bernstein import bernstein_on_box
+from singmesh.boxes.bernstein import split as bernstein_split
+
 from .errors import SurfaceError
+from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation  # noqa: F401  (X, Y, Z re-exported)
-from .tolerances import MAX_DEGREE, ZERO_ULPS
+from .tolerances import CANDIDATE_DUST, MAX_DEGREE, ZERO_ULPS
+
+#: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
+CHILD_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
 
 
-def _differentiate(coeffs: np.ndarray, axis: int) -> np.ndarray:
-    """Monomial coefficients of dF/d(axis) from those of F (same shape)."""
-    n = coeffs.shape[axis]
-    scale = np.arange(n, dtype=float)
-    shape = [1, 1, 1]
-    shape[axis] = n
-    d = coeffs * scale.reshape(shape)
-    d = np.roll(d, -1, axis=axis)
-    index = [slice(None)] * 3
-    index[axis] = n - 1
-    d[tuple(index)] = 0.0
-    return d
+class Surface(abc.ABC):
+    """What the stages know of a surface F(x, y, z) = 0 (issue #10's contract).
 
+    Build one with :meth:`Surface.parse`.
 
-def _powers(values: np.ndarray, n: int) -> np.ndarray:
-    """``values[:, None] ** arange(n)`` by repeated products (exact for ints)."""
-    out = np.empty(values.shape + (n,), dtype=float)
-    out[..., 0] = 1.0
-    for i in range(1, n):
-        out[..., i] = out[..., i - 1] * values
-    return out
-
-
-def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Evaluate the polynomial with monomial tensor ``coeffs`` at ``points``.
-
-    Parameters
+    Attributes
     ----------
-    coeffs : (nx, ny, nz) ndarray
-        ``coeffs[i, j, k]`` multiplies ``x**i y**j z**k``.
-    points : (..., 3) ndarray
+    text : str
+        The input as given (or the sympy expression printed).
+    expr : sympy.Expr
+        F, exact where the input was exact.
+    params : dict
+        The parameter values that were substituted.
+    rounding : float
+        Relative precision of the input's numbers: half a unit in the last
+        digit of its longest rounded decimal (a 15-digit coefficient:
+        5e-15), and never below double precision.  A point where F and
+        grad F vanish to this precision is singular.
+    is_polynomial : bool
+    degree : int
+        Total degree of a polynomial; otherwise the order of the Taylor
+        jets used to classify.  Tolerances scale with it.
+    scale : float
+        The typical size of F's terms: the denominator of relative
+        tolerances (a polynomial's largest coefficient).
 
-    Returns
-    -------
-    values : (...) ndarray
+    Stacks of boxes
+    ---------------
+    The box methods take and return ``data``, an opaque float ndarray
+    whose first axis is the box.  Callers may index it, concatenate stacks
+    and keep it per box, and do nothing else with it.
     """
-    return evaluate_tensors([coeffs], points)[0]
 
+    __slots__ = ()
 
-def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
-    """:func:`evaluate_tensor` for several tensors of one shape at the same points.
+    # ------------------------------------------------------------ building
+    @classmethod
+    def parse(cls, source, **params) -> "Surface":
+        """Parse text (or take a sympy expression) into a :class:`Surface`.
 
-    The powers of the coordinates are formed once for all of them; each
-    value is computed exactly as :func:`evaluate_tensor` computes it alone.
-    """
-    p = np.asarray(points, dtype=float)
-    shape = p.shape[:-1]
-    p = p.reshape(-1, 3)
-    # Many points go in blocks: the (K, ny * nz) intermediate of a whole
-    # large batch does not fit in cache and costs several times more.
-    # Each row's value does not depend on the block (BLAS's gemm), but a
-    # block of one row would be gemv: a last single row joins the block before.
-    starts = list(range(0, len(p), _BLOCK)) or [0]
-    if len(starts) > 1 and len(p) - starts[-1] == 1:
-        starts.pop()
-    ends = starts[1:] + [len(p)]
-    blocks = [_contract(tensors, p[a:b]) for a, b in zip(starts, ends)]
-    if len(blocks) == 1:
-        return [v.reshape(shape) for v in blocks[0]]
-    return [np.concatenate(v).reshape(shape) for v in zip(*blocks)]
+        Parameters
+        ----------
+        source : str or sympy.Expr or Surface
+            The equation in SingSurf's language (:mod:`singmesh.syntax`):
+            ``"lhs = rhs"`` means ``lhs - rhs``; later ``NAME = EXPR;``
+            statements define names, which may use x, y, z and each other.
+            A Surface is returned as it is (without ``params``).
+        **params
+            Parameter values (numbers, or text in the same language); they
+            override the text's definitions of the same names.
 
+        Returns
+        -------
+        Surface
+            A :class:`PolynomialSurface`.
 
-#: Points per block in :func:`evaluate_tensors`.
-_BLOCK = 8192
+        Raises
+        ------
+        SurfaceError
+            If the input is not a usable polynomial in x, y, z.
+        """
+        if isinstance(source, Surface):
+            if not params:
+                return source
+            source = source.expr
+        if isinstance(source, sympy.Basic):
+            text = str(source)
+            expr, values = _substitute(sympy.sympify(source), params)
+            rounding = max([0.0] + [2.0 ** -f._prec for f in expr.atoms(sympy.Float)])
+        elif isinstance(source, str):
+            text = source
+            equation = read_equation(source, params)
+            expr, values, rounding = equation.expr, equation.values, equation.rounding
+        else:
+            raise SurfaceError(
+                f"a surface is given as text or a sympy expression, not {type(source).__name__}"
+            )
+        return PolynomialSurface._from_expr(expr, text, values, rounding)
 
+    # ------------------------------------------------------------ at points
+    @abc.abstractmethod
+    def __call__(self, points) -> np.ndarray:
+        """F at ``points`` (..., 3): shape (...)."""
 
-def _contract(tensors, p: np.ndarray) -> list[np.ndarray]:
-    """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3)."""
-    nx, ny, nz = tensors[0].shape
-    px, py, pz = _powers(p[:, 0], nx), _powers(p[:, 1], ny)[:, None, :], _powers(p[:, 2], nz)
-    out = []
-    for coeffs in tensors:
-        # Contract one variable at a time (a matrix product, then two
-        # row-wise sums): einsum with '...' does not optimise the four-way product.
-        t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
-        # Batched matrix products (BLAS), not einsum's slow generic loop.
-        t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
-        out.append(np.einsum("kl,kl->k", t, pz))
-    return out
+    @abc.abstractmethod
+    def gradient(self, points) -> np.ndarray:
+        """grad F at ``points`` (..., 3): shape (..., 3)."""
+
+    @abc.abstractmethod
+    def value_gradient(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """F and grad F at ``points`` (..., 3): the values of ``self(points)`` and ``self.gradient(points)``."""
+
+    @abc.abstractmethod
+    def hessian(self, points) -> np.ndarray:
+        """Hessian of F at ``points`` (..., 3): shape (..., 3, 3)."""
+
+    @abc.abstractmethod
+    def jet(self, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """F (...), grad F (..., 3) and the Hessian (..., 3, 3) at ``points`` in one pass."""
+
+    @abc.abstractmethod
+    def magnitude(self, points) -> np.ndarray:
+        """The size of F's terms at ``points`` (..., 3): the scale of its rounding error, (...)."""
+
+    @abc.abstractmethod
+    def gradient_magnitude(self, points) -> np.ndarray:
+        """:meth:`magnitude` of the three partial derivatives: (..., 3)."""
+
+    def is_zero(self, points) -> np.ndarray:
+        """Whether F is zero at ``points`` to within its rounding error: bool (...)."""
+        v = self(points)
+        return np.abs(v) <= ZERO_ULPS * np.finfo(float).eps * self.magnitude(points)
+
+    @abc.abstractmethod
+    def taylor(self, point, order: int | None = None) -> np.ndarray:
+        """Taylor coefficients of F at ``point`` (3,): (n+1, n+1, n+1).
+
+        ``T[i, j, k]`` is the coefficient of ``u^i v^j w^k`` in
+        F(point + (u, v, w)), total degree <= n (zero above it); n is
+        ``order``, by default :attr:`degree`.
+        """
+
+    def third_derivatives(self, point) -> np.ndarray:
+        """The tensor of third derivatives of F at ``point`` (3,): (3, 3, 3).
+
+        From :meth:`taylor` of order 3: the derivative along axes (i, j, k)
+        is ``a! b! c!`` times the coefficient of the monomial ``u^a v^b w^c``
+        they make up.
+        """
+        T = self.taylor(np.asarray(point, dtype=float).reshape(3), 3)
+        out = np.empty((3, 3, 3))
+        for i, j, k in itertools.product(range(3), repeat=3):
+            alpha = np.bincount([i, j, k], minlength=3)
+            out[i, j, k] = T[tuple(alpha)] * float(np.prod([math.factorial(int(n)) for n in alpha]))
+        return out
+
+    # ------------------------------------------------------------ on boxes
+    @abc.abstractmethod
+    def enclose(self, box) -> np.ndarray:
+        """``data`` of the one box ``box`` (3, 2): N = 1."""
+
+    @abc.abstractmethod
+    def split(self, data: np.ndarray) -> np.ndarray:
+        """The eight children of each box: (N, 8, ...), child c at :data:`CHILD_OFFSETS` [c] halves."""
+
+    @abc.abstractmethod
+    def excludes_zero(self, data: np.ndarray) -> np.ndarray:
+        """(N,) bool: F certainly has no zero on the closed box (with room for rounding).
+
+        Never True where F vanishes; may be False on an empty box.
+        """
+
+    @abc.abstractmethod
+    def simple_axis(self, data: np.ndarray) -> np.ndarray:
+        """(N,) int64: the first axis a for which the box passes the simplicity test, else -1.
+
+        The test: F_a of one sign on the box, and on both faces normal to a
+        the curve F = 0 has no closed loop (a tangential derivative of one
+        sign there, or F of one sign on the face).  Never claims a simple
+        box that is not.
+        """
+
+    @abc.abstractmethod
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+        """(N,) int64: how F = 0 lies on the face normal to ``n`` of each box.
+
+        ``side`` (N,) picks the low (0) or high (1) face; with u = (n+1)%3,
+        v = (n+2)%3: 0 if the curve is known to be a graph over u (F_v of
+        one sign on the face), 1 if over v (F_u of one sign), 2 if neither.
+        """
+
+    @abc.abstractmethod
+    def may_vanish(self, data: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+        """(N,) bool: F and its partial derivatives along ``axes`` may all vanish on the box.
+
+        Never False on a box holding a singular point (of the boxes below
+        the last :meth:`enclose`).
+        """
+
+    # ------------------------------------------------------------ on lines
+    @abc.abstractmethod
+    def line_roots(self, axis: int, fixed: np.ndarray, s0: np.ndarray,
+                   s1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The zeros of F on axis-parallel segments: (row (R,) int64, s (R,) float64).
+
+        Segment l is {coordinate ``axis`` = s, the two others (cyclic order
+        (axis+1)%3, (axis+2)%3) = ``fixed[l]``}, s in [s0[l], s1[l]].
+        Every sign change at least once (nearly double roots may come
+        too), to full double precision.
+        """
 
 
 @dataclass(frozen=True, eq=False)
-class Surface:
-    """A real algebraic surface F(x, y, z) = 0.
+class PolynomialSurface(Surface):
+    """A real algebraic surface F(x, y, z) = 0: the :class:`Surface` of a polynomial.
 
-    Build it with :meth:`Surface.parse`.
+    Build it with :meth:`Surface.parse`.  Its box ``data`` are the Bernstein
+    tensors of F on the boxes, (N, n0+1, n1+1, n2+1).
 
     Attributes
     ----------
@@ -140,46 +267,13 @@ class Surface:
     params: Mapping[str, float] = field(default_factory=dict)
     rounding: float = float(np.finfo(float).eps)
 
+    is_polynomial = True
+
     # ------------------------------------------------------------ building
     @classmethod
-    def parse(cls, source, **params) -> "Surface":
-        """Parse text (or take a sympy expression) into a :class:`Surface`.
-
-        Parameters
-        ----------
-        source : str or sympy.Expr or Surface
-            The equation in SingSurf's language (:mod:`singmesh.syntax`):
-            ``"lhs = rhs"`` means ``lhs - rhs``; later ``NAME = EXPR;``
-            statements define names, which may use x, y, z and each other.
-        **params
-            Parameter values (numbers, or text in the same language); they
-            override the text's definitions of the same names.
-
-        Raises
-        ------
-        SurfaceError
-            If the input is not a usable polynomial in x, y, z.
-        """
-        if isinstance(source, Surface):
-            if not params:
-                return source
-            source = source.expr
-        if isinstance(source, sympy.Basic):
-            text = str(source)
-            expr, values = _substitute(sympy.sympify(source), params)
-            rounding = max([0.0] + [2.0 ** -f._prec for f in expr.atoms(sympy.Float)])
-        elif isinstance(source, str):
-            text = source
-            equation = read_equation(source, params)
-            expr, values, rounding = equation.expr, equation.values, equation.rounding
-        else:
-            raise SurfaceError(
-                f"a surface is given as text or a sympy expression, not {type(source).__name__}"
-            )
-        return cls._from_expr(expr, text, values, rounding)
-
-    @classmethod
-    def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr], rounding: float = 0.0) -> "Surface":
+    def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr],
+                   rounding: float = 0.0) -> "PolynomialSurface":
+        """The polynomial ``expr`` (checked, expanded) as a surface."""
         unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
         if unknown:
             raise SurfaceError(
@@ -219,7 +313,7 @@ class Surface:
         """Monomial tensors of Fx, Fy, Fz (cached)."""
         cache = self.__dict__.setdefault("_cache", {})
         if "grad" not in cache:
-            cache["grad"] = tuple(_differentiate(self.coeffs, a) for a in range(3))
+            cache["grad"] = tuple(differentiate(self.coeffs, a) for a in range(3))
         return cache["grad"]
 
     @property
@@ -229,7 +323,7 @@ class Surface:
         if "hess" not in cache:
             g = self.gradient_coeffs
             cache["hess"] = tuple(
-                tuple(_differentiate(g[a], b) for b in range(3)) for a in range(3)
+                tuple(differentiate(g[a], b) for b in range(3)) for a in range(3)
             )
         return cache["hess"]
 
@@ -258,9 +352,9 @@ class Surface:
         m, nx, ny, nz = c.shape
         # One variable at a time, as matrix products (BLAS): x against the
         # (x; y, component, z) table, then y and z row by row.
-        t = _powers(p[:, 0], nx) @ c.transpose(1, 2, 0, 3).reshape(nx, -1)  # (K, ny*m*nz)
-        t = np.matmul(_powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, m * nz))  # (K, 1, m*nz)
-        v = np.matmul(t.reshape(-1, m, nz), _powers(p[:, 2], nz)[:, :, None])[:, :, 0]  # (K, m)
+        t = powers(p[:, 0], nx) @ c.transpose(1, 2, 0, 3).reshape(nx, -1)  # (K, ny*m*nz)
+        t = np.matmul(powers(p[:, 1], ny)[:, None, :], t.reshape(-1, ny, m * nz))  # (K, 1, m*nz)
+        v = np.matmul(t.reshape(-1, m, nz), powers(p[:, 2], nz)[:, :, None])[:, :, 0]  # (K, m)
         f = v[:, 0].reshape(shape)
         g = v[:, 1:4].reshape(shape + (3,))
         h = v[:, [4, 5, 6, 5, 7, 8, 6, 8, 9]].reshape(shape + (3, 3))
@@ -290,10 +384,77 @@ class Surface:
         """Sum of |terms| of F at ``points``: the scale of F's rounding error."""
         return evaluate_tensor(np.abs(self.coeffs), np.abs(np.asarray(points, float)))
 
-    def is_zero(self, points) -> np.ndarray:
-        """Whether F is zero at ``points`` to within its rounding error."""
-        v = self(points)
-        return np.abs(v) <= ZERO_ULPS * np.finfo(float).eps * self.magnitude(points)
+    def gradient_magnitude(self, points) -> np.ndarray:
+        """Sum of |terms| of Fx, Fy, Fz at ``points``: (..., 3)."""
+        p = np.abs(np.asarray(points, float))
+        return np.stack(evaluate_tensors([np.abs(g) for g in self.gradient_coeffs], p), axis=-1)
+
+    @property
+    def scale(self) -> float:
+        """The largest |coefficient|."""
+        return float(np.abs(self.coeffs).max())
+
+    def taylor(self, point, order: int | None = None) -> np.ndarray:
+        """Taylor coefficients at ``point``: exact up to rounding at the default order (the degree)."""
+        from singmesh.skeleton.splitting import compose
+
+        p = np.asarray(point, dtype=float).reshape(3)
+        n = self.degree if order is None else int(order)
+        T = compose(self.coeffs, p, np.eye(3), min(n, self.degree))
+        if n <= self.degree:
+            return T
+        out = np.zeros((n + 1,) * 3)
+        out[: self.degree + 1, : self.degree + 1, : self.degree + 1] = T
+        return out
+
+    def third_derivatives(self, point) -> np.ndarray:
+        """Third derivatives at ``point`` (3,) from their monomial tensors (cached)."""
+        cache = self.__dict__.setdefault("_cache", {})
+        if "third" not in cache:
+            h = self.hessian_coeffs
+            cache["third"] = [[[differentiate(h[i][j], k) for k in range(3)] for j in range(3)] for i in range(3)]
+        c = cache["third"]
+        x = np.asarray(point, dtype=float).reshape(3)
+        return np.array([[[float(evaluate_tensor(c[i][j][k], x[None])[0]) for k in range(3)] for j in range(3)]
+                         for i in range(3)])
+
+    # ------------------------------------------------------------ on boxes
+    def enclose(self, box) -> np.ndarray:
+        """Bernstein tensor on ``box``, (1, n0+1, n1+1, n2+1); the root of later :meth:`may_vanish` tests."""
+        root = bernstein_on_box(self.coeffs, np.asarray(box, dtype=float))[None]
+        # Splitting from the root leaves rounding dust of the root's size on
+        # coefficients that should be exactly zero (at a singular point on a
+        # split plane): tiny next to the box's own coefficients at depth.
+        self.__dict__.setdefault("_cache", {})["dust"] = CANDIDATE_DUST * float(np.abs(root).max())
+        return root
+
+    def split(self, data: np.ndarray) -> np.ndarray:
+        """De Casteljau at the midpoints: (N, 8, n0+1, n1+1, n2+1)."""
+        return bernstein_split(data).reshape((len(data), 8) + data.shape[1:])
+
+    def excludes_zero(self, data: np.ndarray) -> np.ndarray:
+        """All coefficients clearly of one sign (``PRUNE_SLACK``)."""
+        return polynomial_bounds.empty_boxes(data)
+
+    def simple_axis(self, data: np.ndarray) -> np.ndarray:
+        """:func:`singmesh.boxes.polynomial_bounds.monotone_axis`."""
+        return polynomial_bounds.monotone_axis(data)
+
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+        """:func:`singmesh.boxes.polynomial_bounds.face_modes`."""
+        return polynomial_bounds.face_modes(data, n, side)
+
+    def may_vanish(self, data: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+        """Bernstein coefficients of F and of each derivative of both signs,
+        allowing for the dust of the last :meth:`enclose`'s root."""
+        dust = self.__dict__.get("_cache", {}).get("dust", 0.0)
+        return polynomial_bounds.may_vanish(data, axes, dust)
+
+    # ------------------------------------------------------------ on lines
+    def line_roots(self, axis: int, fixed: np.ndarray, s0: np.ndarray,
+                   s1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Companion-matrix roots of F on the segments, Newton-polished."""
+        return polynomial_lines.line_roots(self.coeffs, axis, fixed, s0, s1)
 
     def __str__(self) -> str:
         """The expanded polynomial, decimals written as decimals (``0.123`` not ``123/1000``)."""
@@ -305,7 +466,7 @@ class Surface:
         return str(self.expr.xreplace(subs))
 
     def __repr__(self) -> str:
-        return f"Surface({str(self)!r}, degree={self.degree})"
+        return f"PolynomialSurface({str(self)!r}, degree={self.degree})"
 
 
 # ---------------------------------------------------------------- checks

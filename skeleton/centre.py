@@ -82,7 +82,7 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
         return None
     m = frame.corank
     N = max(frame.order, max(sum(a) for a in alphas) + 2)
-    T = compose(surface.coeffs, p, np.eye(3), surface.degree)
+    T = surface.taylor(p)
     G = compose(T, np.zeros(3), frame.basis, N)
     g, phis = split(G, m, frame.eigenvalues[m:], N, critical=False)
     K = np.eye(m) if frame.kernel is None else frame.kernel
@@ -110,7 +110,7 @@ def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
     """max(|F|, |grad F|) relative to the size of F's terms at x."""
     f, g = surface.value_gradient(x)
     f, g = np.abs(f), np.abs(g).max(axis=-1)
-    scale = np.maximum(surface.magnitude(x), np.abs(surface.coeffs).max())
+    scale = np.maximum(surface.magnitude(x), surface.scale)
     return np.maximum(f, g) / scale
 
 

@@ -9,8 +9,9 @@ A-type points, the local axis used to triangulate around them.
 
 Method
 ------
-1. Taylor polynomial of F at the point, in floating point (Horner's rule on
-   the monomial tensor: :func:`singmesh.skeleton.splitting.compose`).
+1. Taylor polynomial of F at the point, in floating point
+   (``Surface.taylor``; for a polynomial, Horner's rule on the monomial
+   tensor: :func:`singmesh.skeleton.splitting.compose`).
 2. Hessian eigen-decomposition.  Eigenvalues with ``|lambda| <= RANK * S``
    are zero (S: the largest Taylor coefficient of degree >= 2, see
    :mod:`singmesh.tolerances`); this gives the corank and the signature.
@@ -91,7 +92,7 @@ from typing import Sequence
 import numpy as np
 
 from singmesh.errors import SurfaceError
-from singmesh.surface import Surface, evaluate_tensor
+from singmesh.surface import Surface
 from singmesh.tolerances import (
     CLASSIFY_JET_RTOL,
     CLASSIFY_ORDERS,
@@ -273,8 +274,8 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
     centring reads the type more loosely than naming does.
     """
     # Taylor polynomial at p (exact up to rounding: no truncation).
-    T = compose(s.coeffs, p, np.eye(3), s.degree)
-    deg = degree_grid(3, s.degree)
+    T = s.taylor(p)
+    deg = degree_grid(3, T.shape[0] - 1)
     S = float(np.max(np.abs(T[deg >= 2]), initial=0.0))
     _check_singular(s, p, T, S)
 
@@ -348,8 +349,7 @@ def _check_singular(s: Surface, p: np.ndarray, T: np.ndarray, S: float) -> None:
     # rounding of the input's own coefficients can make of them.
     ulps = ZERO_ULPS * eps + INPUT_ROUNDING * s.degree * s.rounding
     round_v = ulps * float(s.magnitude(p))
-    round_g = ulps * max(
-        float(evaluate_tensor(np.abs(g), np.abs(p))) for g in s.gradient_coeffs)
+    round_g = ulps * float(np.max(s.gradient_magnitude(p)))
     tol = CLASSIFY_SINGULAR_RTOL * S
     bad = []
     if abs(value) > tol + round_v:

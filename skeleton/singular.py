@@ -1,8 +1,8 @@
 """Singular points: where F and all three partial derivatives vanish.
 
-1. Candidate boxes: subdivide the domain with the Bernstein form of F
-   (stacked arrays, whole-level operations; the forms of Fx, Fy, Fz are
-   its differences) and keep a box only while all four may vanish on it.
+1. Candidate boxes: subdivide the domain with the surface's bounds on
+   boxes (stacked arrays, whole-level operations; a polynomial's Bernstein
+   forms) and keep a box only while F, Fx, Fy, Fz may all vanish on it.
 2. Gauss-Newton on (F, Fx, Fy, Fz) from every candidate box centre, all at
    once in double precision.
 3. Each distinct end point is classified and, if degenerate (A2 and
@@ -24,7 +24,6 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from singmesh import tolerances as tol
-from singmesh.boxes.bernstein import bernstein_on_box, derivative, split
 from singmesh.surface import Surface
 
 from .centre import centre, residual
@@ -33,29 +32,26 @@ from .points import SingularPoint
 
 
 #: Per surface (while it lives): the last candidate boxes of each box and
-#: axes searched, with their tensors, for a deeper search to go on from.
+#: axes searched, with their data, for a deeper search to go on from.
 _KEPT: "weakref.WeakKeyDictionary[Surface, dict]" = weakref.WeakKeyDictionary()
 
 
 def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2)):
     """Boxes at ``level`` on which F and its partial derivatives along ``axes`` may all vanish.
 
-    Only F's Bernstein tensors are split: those of its derivatives on the
-    same box are differences of them (up to a positive factor), so the
-    derivatives cost no conversion and no split.  Boxes are refined level
-    by level as stacked arrays, at most ``CANDIDATE_CHUNK`` at a time (a
-    curve of singular points or hundreds of nodes make many), so memory
-    stays bounded and nothing is dropped.
+    The surface's bounds on boxes decide (``Surface.enclose``, ``split``,
+    ``may_vanish``).  Boxes are refined level by level as stacked arrays,
+    at most ``CANDIDATE_CHUNK`` at a time (a curve of singular points or
+    hundreds of nodes make many), so memory stays bounded and nothing is
+    dropped.
 
     Returns
     -------
     lo, hi : (K, 3) ndarrays, the boxes' corners, sorted
     """
-    root = bernstein_on_box(surface.coeffs, box)[None]
-    # Splitting from the root leaves rounding dust of the root's size on
-    # coefficients that should be exactly zero (at a singular point on a
-    # split plane): tiny next to the box's own coefficients at depth.
-    dust = tol.CANDIDATE_DUST * float(np.abs(root).max())
+    # Enclosed even when a kept search goes on: the surface's tests may
+    # depend on the root box (a polynomial's rounding dust).
+    root = surface.enclose(box)
     todo = [(root, np.zeros((1, 3), np.int64), 0)]
     key = (np.asarray(box, dtype=float).tobytes(), tuple(axes))
     kept = _KEPT.get(surface, {})
@@ -68,35 +64,25 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
     out = []
     offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
     while todo:
-        t, corner, lvl = todo.pop()
-        # F first, then each derivative on the boxes still kept: the same
-        # boxes as testing all four everywhere, with the differences taken
-        # only where needed.  A derivative along an axis F does not depend
-        # on is zero: no test.
-        for a in [None] + [a for a in axes if t.shape[1 + a] > 1]:
-            if len(corner) == 0:
-                break
-            c = t if a is None else derivative(t, a)
-            flat = c.reshape(len(c), -1)
-            # Exact zeros at box corners come out of the conversion as
-            # +-1e-17: allow for the rounding, relative to the coefficients.
-            slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
-            keep = (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+        d, corner, lvl = todo.pop()
+        if len(corner):
+            keep = surface.may_vanish(d, tuple(axes))
             if not keep.all():
-                t, corner = t[keep], corner[keep]
+                d, corner = d[keep], corner[keep]
         if len(corner) == 0:
             continue
         if lvl == level:
             out.append(corner)
-            ends.append(t)
+            ends.append(d)
             continue
         for part in range(0, len(corner), tol.CANDIDATE_CHUNK):
             sl = slice(part, part + tol.CANDIDATE_CHUNK)
-            todo.append((split(t[sl]).reshape((-1,) + t.shape[1:]),
+            children = surface.split(d[sl])  # (n, 8, ...)
+            todo.append((children.reshape((-1,) + children.shape[2:]),
                          (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
     if not out:
         return np.zeros((0, 3)), np.zeros((0, 3))
-    if sum(t.nbytes for t in ends) <= tol.CANDIDATE_KEEP_BYTES:
+    if sum(d.nbytes for d in ends) <= tol.CANDIDATE_KEEP_BYTES:
         _KEPT.setdefault(surface, {})[key] = (level, np.concatenate(ends), np.concatenate(out))
     corner = np.concatenate(out)
     corner = corner[np.lexsort(corner.T[::-1])]
@@ -446,7 +432,7 @@ def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, n
 
     There the x-, y- or z-skeleton curves V(F, F_a), V(F, F_b) meet: the
     surface normal is along the third axis.  Found like singular points:
-    Bernstein candidates for (F, F_a, F_b), then Newton on that square
+    candidate boxes for (F, F_a, F_b), then Newton on that square
     system from every candidate at once.
 
     Returns
@@ -483,7 +469,7 @@ def skeleton_nodes(surface: Surface, box, level: int = 6) -> tuple[np.ndarray, n
         good = (np.isfinite(x).all(axis=1)
                 & np.all((x >= box[:, 0] - 1e-9 * size) & (x <= box[:, 1] + 1e-9 * size), axis=1)
                 & (np.abs(f) <= 1e-12 * scale) & (np.abs(g[:, a]) <= 1e-10 * gn) & (np.abs(g[:, b]) <= 1e-10 * gn)
-                & (gn > tol.SINGULAR_LOOSE * np.abs(surface.coeffs).max()))
+                & (gn > tol.SINGULAR_LOOSE * surface.scale))
         # Newton from boxes along a curve of such points (Cayley's cubic has
         # lines of them) lands all along it: clusters that long are curves.
         step = float(np.max(hi[0] - lo[0]))

@@ -192,7 +192,7 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     x = np.array(q, dtype=float)
     k = len(x)
     hk = np.broadcast_to(np.asarray(h, dtype=float), (k,))
-    floor = tol.CURVE_SVD_FLOOR * float(np.abs(surface.coeffs).max())
+    floor = tol.CURVE_SVD_FLOOR * float(surface.scale)
     previous = np.full(k, np.inf)
     stalled = np.zeros(k, np.int64)
     if across is not None:
@@ -573,15 +573,7 @@ def _rank_one(surface: Surface, x: np.ndarray) -> bool:
 
 def third_derivatives(surface: Surface, x: np.ndarray) -> np.ndarray:
     """The tensor of third derivatives of F at one point x: (3, 3, 3)."""
-    from singmesh.surface import _differentiate, evaluate_tensor
-
-    cache = surface.__dict__.setdefault("_cache", {})
-    if "third" not in cache:
-        h = surface.hessian_coeffs
-        cache["third"] = [[[_differentiate(h[i][j], k) for k in range(3)] for j in range(3)] for i in range(3)]
-    c = cache["third"]
-    return np.array([[[float(evaluate_tensor(c[i][j][k], x[None])[0]) for k in range(3)] for j in range(3)]
-                     for i in range(3)])
+    return surface.third_derivatives(np.asarray(x, dtype=float))
 
 
 def _degeneracy(surface: Surface, x: np.ndarray, rank_one: bool) -> float:
@@ -806,7 +798,7 @@ def transversal_types(surface: Surface, points: np.ndarray, tangents: np.ndarray
     g = surface(points[:, None, :] + ring)
     sign = g >= 0  # a zero counts as positive (F + eps)
     arcs = (sign != np.roll(sign, 1, axis=1)).sum(axis=1)
-    coeff = np.abs(surface.coeffs).max()
+    coeff = surface.scale
     names, sheets = [], np.zeros(k, np.int64)
     for i in range(k):
         a = int(arcs[i])

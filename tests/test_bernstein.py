@@ -83,7 +83,7 @@ def test_simplicity_axis_is_the_first_that_passes():
     """monotone_axis skips axes on boxes an earlier one passed: the answer
     is still the first axis (in 0, 1, 2) whose derivative has one sign and
     whose two end faces hold no closed curve, checked here box by box."""
-    from singmesh.boxes.octree import monotone_axis
+    from singmesh.boxes.polynomial_bounds import monotone_axis
 
     def one_sign(c):
         return (c.min() >= 0 and c.max() > 0) or (c.max() <= 0 and c.min() < 0)

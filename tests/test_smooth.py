@@ -195,9 +195,9 @@ def test_box_graph_is_a_union_of_cycles():
     from singmesh.facets.cycles import box_graph, box_links, find_cycles
 
     s = singmesh.Surface.parse("(x^2+y^2+z^2+0.64-0.09)^2-2.56(x^2+y^2)")
-    tree = subdivide(s.coeffs, np.array(B2, float), 3, 6)
+    tree = subdivide(s, np.array(B2, float), 3, 6)
     events = compute_events(s, tree)
-    links = box_links(face_links(tree, events))
+    links = box_links(face_links(s, tree, events))
     cycles = find_cycles(*links, n_events=len(events.key))
     for box in np.unique(links[0])[:50]:
         g = box_graph(links, int(box))

@@ -1,0 +1,128 @@
+"""The box methods of a polynomial surface: Bernstein forms on stacked boxes.
+
+:class:`singmesh.surface.PolynomialSurface` delegates its bounds on boxes
+(the ``data`` of the surface interface) here.  Its ``data`` is the stack of
+Bernstein tensors ``(N, n0+1, n1+1, n2+1)`` of F on the boxes
+(:mod:`singmesh.boxes.bernstein`); the convex-hull property makes every
+test below a certainty about F on the whole closed box, up to the slacks
+that allow for rounding.
+
+A box is *simple* when the surface in it is a union of discs, each bounded
+by one cycle of face links.  The test used: some partial derivative F_a is
+of one sign on the box (so each line parallel to axis a meets the surface
+at most once and the surface is a graph over the faces normal to a), and on
+both faces normal to a the face curve has no closed loop (a tangential
+derivative of one sign there, or no curve at all).  A hole in the graph's
+domain would be bounded by a closed loop of the top or bottom face curve,
+because the two face curves cannot cross when F is monotone along a;
+excluding such loops leaves discs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from singmesh import tolerances as tol
+
+from .bernstein import derivative, sign_definite
+
+
+def empty_boxes(tensors: np.ndarray) -> np.ndarray:
+    """Boxes where F certainly has no zero: all coefficients > slack, or all < -slack.
+
+    The slack (``PRUNE_SLACK`` of the largest coefficient) keeps boxes where
+    F may vanish up to rounding, e.g. exactly at a corner: pruning such a
+    box would leave a hole in the faces that carry the events found there.
+    """
+    flat = tensors.reshape(len(tensors), -1)
+    slack = tol.PRUNE_SLACK * np.abs(flat).max(axis=1)
+    return (flat.min(axis=1) > slack) | (flat.max(axis=1) < -slack)
+
+
+def face_without_loops(face: np.ndarray) -> np.ndarray:
+    """Whether the curve F + eps = 0 on stacked faces (N, a, b) has no closed loop.
+
+    True when a tangential derivative is of one sign (the curve is a graph)
+    or when there is no curve at all.
+    """
+    return (
+        sign_definite(np.diff(face, axis=1), (1, 2))
+        | sign_definite(np.diff(face, axis=2), (1, 2))
+        | (face.min(axis=(1, 2)) >= 0)
+        | (face.max(axis=(1, 2)) < 0)
+    )
+
+
+def monotone_axis(tensors: np.ndarray) -> np.ndarray:
+    """First axis a for which the box passes the simplicity test, else -1."""
+    result = np.full(len(tensors), -1, dtype=np.int64)
+    todo = np.arange(len(tensors))
+    for a in range(3):
+        # Each axis only on the boxes no earlier axis passed.
+        t = tensors if len(todo) == len(tensors) else tensors[todo]
+        ok = sign_definite(derivative(t, a), (1, 2, 3))
+        ok[ok] = face_without_loops(np.take(t[ok], 0, axis=1 + a)) & face_without_loops(np.take(t[ok], -1, axis=1 + a))
+        result[todo[ok]] = a
+        todo = todo[~ok]
+        if len(todo) == 0:
+            break
+    return result
+
+
+def face_modes(tensors: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+    """How the curve F = 0 lies on one face normal to axis ``n`` of each box.
+
+    Parameters
+    ----------
+    tensors : (N, n0+1, n1+1, n2+1) ndarray
+    n : int
+        The face's normal axis; its tangential axes are u = (n+1)%3, v = (n+2)%3.
+    side : (N,) int
+        0 for each box's low face, 1 for its high face.
+
+    Returns
+    -------
+    (N,) int64
+        0: a graph over u (F_v of one sign); 1: over v (F_u of one sign);
+        2: neither is known.
+    """
+    # Gather the face's slice only, not the boxes' whole tensors.
+    index = [np.arange(len(tensors)), slice(None), slice(None), slice(None)]
+    index[1 + n] = np.where(np.asarray(side) == 1, tensors.shape[1 + n] - 1, 0)
+    face = tensors[tuple(index)]
+    if n == 1:  # the remaining axes are (x, z) = (v, u)
+        face = np.swapaxes(face, 1, 2)
+    over_u = sign_definite(np.diff(face, axis=2), (1, 2))  # F_v of one sign
+    over_v = sign_definite(np.diff(face, axis=1), (1, 2))  # F_u of one sign
+    return np.where(over_u, 0, np.where(over_v, 1, 2)).astype(np.int64)
+
+
+def may_vanish(tensors: np.ndarray, axes, dust: float) -> np.ndarray:
+    """Boxes on which F and its partial derivatives along ``axes`` may all vanish.
+
+    The Bernstein forms of the derivatives are differences of F's (up to a
+    positive factor): no conversion and no split.  F is tested first, then
+    each derivative on the boxes still kept only.  A derivative along an
+    axis F does not depend on is zero: no test.  Coefficients within
+    ``CANDIDATE_SLACK`` of the box's largest, or within ``dust`` (the
+    rounding left by splitting from the root box), count as zero: exact
+    zeros at box corners come out of the conversion as +-1e-17.
+
+    Returns
+    -------
+    (N,) bool
+    """
+    live = np.arange(len(tensors))
+    t = tensors
+    for a in [None] + [a for a in axes if t.shape[1 + a] > 1]:
+        if len(live) == 0:
+            break
+        c = t if a is None else derivative(t, a)
+        flat = c.reshape(len(c), -1)
+        slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
+        keep = (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+        if not keep.all():
+            t, live = t[keep], live[keep]
+    out = np.zeros(len(tensors), bool)
+    out[live] = True
+    return out

@@ -1,0 +1,91 @@
+"""Monomial tensors of polynomials in x, y, z: derivatives and evaluation at points.
+
+``C[i, j, k]`` is the coefficient of ``x**i y**j z**k``.  Used by
+:class:`singmesh.surface.PolynomialSurface` (values, gradients, Hessians
+and term sizes at points); the stages never see these tensors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def differentiate(coeffs: np.ndarray, axis: int) -> np.ndarray:
+    """Monomial coefficients of dF/d(axis) from those of F (same shape)."""
+    n = coeffs.shape[axis]
+    scale = np.arange(n, dtype=float)
+    shape = [1, 1, 1]
+    shape[axis] = n
+    d = coeffs * scale.reshape(shape)
+    d = np.roll(d, -1, axis=axis)
+    index = [slice(None)] * 3
+    index[axis] = n - 1
+    d[tuple(index)] = 0.0
+    return d
+
+
+def powers(values: np.ndarray, n: int) -> np.ndarray:
+    """``values[:, None] ** arange(n)`` by repeated products (exact for ints)."""
+    out = np.empty(values.shape + (n,), dtype=float)
+    out[..., 0] = 1.0
+    for i in range(1, n):
+        out[..., i] = out[..., i - 1] * values
+    return out
+
+
+def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Evaluate the polynomial with monomial tensor ``coeffs`` at ``points``.
+
+    Parameters
+    ----------
+    coeffs : (nx, ny, nz) ndarray
+        ``coeffs[i, j, k]`` multiplies ``x**i y**j z**k``.
+    points : (..., 3) ndarray
+
+    Returns
+    -------
+    values : (...) ndarray
+    """
+    return evaluate_tensors([coeffs], points)[0]
+
+
+def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
+    """:func:`evaluate_tensor` for several tensors of one shape at the same points.
+
+    The powers of the coordinates are formed once for all of them; each
+    value is computed exactly as :func:`evaluate_tensor` computes it alone.
+    """
+    p = np.asarray(points, dtype=float)
+    shape = p.shape[:-1]
+    p = p.reshape(-1, 3)
+    # Many points go in blocks: the (K, ny * nz) intermediate of a whole
+    # large batch does not fit in cache and costs several times more.
+    # Each row's value does not depend on the block (BLAS's gemm), but a
+    # block of one row would be gemv: a last single row joins the block before.
+    starts = list(range(0, len(p), _BLOCK)) or [0]
+    if len(starts) > 1 and len(p) - starts[-1] == 1:
+        starts.pop()
+    ends = starts[1:] + [len(p)]
+    blocks = [_contract(tensors, p[a:b]) for a, b in zip(starts, ends)]
+    if len(blocks) == 1:
+        return [v.reshape(shape) for v in blocks[0]]
+    return [np.concatenate(v).reshape(shape) for v in zip(*blocks)]
+
+
+#: Points per block in :func:`evaluate_tensors`.
+_BLOCK = 8192
+
+
+def _contract(tensors, p: np.ndarray) -> list[np.ndarray]:
+    """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3)."""
+    nx, ny, nz = tensors[0].shape
+    px, py, pz = powers(p[:, 0], nx), powers(p[:, 1], ny)[:, None, :], powers(p[:, 2], nz)
+    out = []
+    for coeffs in tensors:
+        # Contract one variable at a time (a matrix product, then two
+        # row-wise sums): einsum with '...' does not optimise the four-way product.
+        t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
+        # Batched matrix products (BLAS), not einsum's slow generic loop.
+        t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
+        out.append(np.einsum("kl,kl->k", t, pz))
+    return out
