@@ -320,14 +320,14 @@ def _up(x):
     return np.nextafter(x, np.inf)
 
 
-def _widen(lo, hi, rel=FUNCTION_ULPS * _EPS):
+def _widen(lo, hi, rel=FUNCTION_ULPS * _EPS, tiny=(_TINY, _TINY)):
     """[lo, hi] widened by ``rel`` relative (and a tiny absolute amount).
 
     An overflowed bound (lo = +inf, hi = -inf) becomes the largest double:
     the true value may be finite.
     """
-    wl = np.where(lo == np.inf, _BIG, lo - (np.abs(lo) * rel + _TINY))
-    wh = np.where(hi == -np.inf, -_BIG, hi + (np.abs(hi) * rel + _TINY))
+    wl = np.where(lo == np.inf, _BIG, lo - (np.abs(lo) * rel + tiny[0]))
+    wh = np.where(hi == -np.inf, -_BIG, hi + (np.abs(hi) * rel + tiny[1]))
     return wl, wh
 
 
@@ -359,13 +359,14 @@ def _powi(lo, hi, n):
     if n == 2:
         mig, mag = _mig_mag(lo, hi)
         return _down(mig * mig), _up(mag * mag)
+    if n == 1:
+        return lo, hi
     with np.errstate(over="ignore", invalid="ignore"):
         if n % 2 == 0:
-            mig, mag = _mig_mag(lo, hi)
-            plo, phi = np.power(mig, n), np.power(mag, n)
-        else:
-            plo, phi = np.power(lo, n), np.power(hi, n)
-    plo, phi = _widen(plo, phi)
+            lo, hi = _mig_mag(lo, hi)
+        plo, phi = np.power(lo, n), np.power(hi, n)
+    # An exact zero stays zero (0^n is exact): 1 / x^3 on [0, 1] is [1, inf].
+    plo, phi = _widen(plo, phi, tiny=(np.where(lo == 0, 0.0, _TINY), np.where(hi == 0, 0.0, _TINY)))
     if n % 2 == 0:
         plo = np.maximum(plo, 0.0)
     return plo, phi
