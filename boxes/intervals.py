@@ -263,6 +263,15 @@ class Graph:
         elif op == "powr":
             inner = self.mul(self.const(p), self.powr(a, p - 1))
         elif op == "sqrt":
+            squares = self._squares(a)
+            if squares:
+                # sqrt(f1^2 + ... + fk^2) (R-functions): its derivative is
+                # sum (fi / sqrt(...)) fi', each ratio in [-1, 1]: bounded
+                # where the plain rule's 1/sqrt would be infinite.
+                out = self.zero
+                for f in squares:
+                    out = self.add(out, self.mul(self.node("unit", (f, n)), self.diff(f, v)))
+                return out
             inner = self.mul(self.const(0.5), self.powi(n, -1))
         elif op == "exp":
             inner = n
@@ -291,9 +300,26 @@ class Graph:
             return self.node(op, tuple(args[:m]) + tuple(self.diff(b, v) for b in args[m:]))
         elif op == "sgn":
             return self.zero
+        elif op == "unit":
+            # d(f/r) = (f' - (f/r) r') / r
+            f, r = args
+            return self.mul(self.sub(self.diff(f, v), self.mul(n, self.diff(r, v))), self.powi(r, -1))
         else:  # pragma: no cover
             raise AssertionError(op)
         return self.mul(inner, da)
+
+    def _squares(self, n: int) -> list[int] | None:
+        """[f1, ..., fk] if node n is f1^2 + ... + fk^2 (k >= 2), else None."""
+        terms, stack = [], [n]
+        while stack:
+            m = stack.pop()
+            if self.ops[m] == "add":
+                stack.extend(self.args[m])
+            elif self.ops[m] == "powi" and self.params[m] == 2:
+                terms.append(self.args[m][0])
+            else:
+                return None
+        return terms if len(terms) >= 2 else None
 
     def plan(self, outputs) -> list[int]:
         """Nodes needed for ``outputs``, in evaluation order."""
@@ -308,7 +334,7 @@ class Graph:
         return sorted(need)
 
     def has_kinks(self, outputs) -> bool:
-        return any(self.ops[n] in ("abs", "min", "max", "sgn", "maxd", "mind") for n in self.plan(outputs))
+        return any(self.ops[n] in ("abs", "min", "max", "sgn", "maxd", "mind", "unit") for n in self.plan(outputs))
 
 
 # ------------------------------------------------------------------ intervals
@@ -515,6 +541,14 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray) -> Inte
                 rh = np.where(ah < 0, -1.0, 1.0)
                 nan = np.isnan(al) | np.isnan(ah)
                 rl, rh = np.where(nan, np.nan, rl), np.where(nan, np.nan, rh)
+            elif op == "unit":
+                # f / r with |f| <= r: in [-1, 1] whatever the quotient's bounds.
+                il, ih = _recip(L[args[1]], H[args[1]])
+                p1, p2, p3, p4 = al * il, al * ih, ah * il, ah * ih
+                rl = np.maximum(_down(np.fmin(np.fmin(p1, p2), np.fmin(p3, p4))), -1.0)
+                rh = np.minimum(_up(np.fmax(np.fmax(p1, p2), np.fmax(p3, p4))), 1.0)
+                nan = np.isnan(al) | np.isnan(ah) | np.isnan(L[args[1]])
+                rl, rh = np.where(nan, np.nan, rl), np.where(nan, np.nan, rh)
             elif op in ("maxd", "mind"):
                 m = len(args) // 2
                 vl = [L[a] for a in args[:m]]
@@ -614,6 +648,11 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                 # NaN anywhere makes the result NaN (max would too).
                 if magnitude:
                     M[n] = np.stack([M[b] for b in args]).max(axis=0)
+            elif op == "unit":
+                den = V[args[1]]
+                r = np.where(den == 0, 0.0, a / np.where(den == 0, 1.0, den))
+                if magnitude:
+                    M[n] = np.abs(r)
             elif op in ("maxd", "mind"):
                 m = len(args) // 2
                 vals = np.stack([V[b] for b in args[:m]])

@@ -98,6 +98,11 @@ class ElementarySurface:
             raise SurfaceError(f"F = {expr} is constant: its zero set is empty or everything")
         self._grad = [g.diff(self._f, a) for a in range(3)]
         self._hess = [[g.diff(self._grad[a], b) for b in range(3)] for a in range(3)]
+        # Whether F can have poles (then a derivative of one sign does not
+        # make F monotone on a box unless F is bounded there).
+        self._poles = any(
+            g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
+            for n in g.plan([self._f]))
         s = np.linspace(-1.0, 1.0, 5)
         grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
         mag = self.magnitude(grid)
@@ -285,6 +290,13 @@ class ElementarySurface:
         slack = self._slack(flo, fhi, lo, hi)
         return (flo > slack) | (fhi < -slack) | np.isnan(flo) | np.isnan(fhi)
 
+    def _continuous(self, lo, hi):
+        """Where F is bounded on the boxes (no pole): (N,) bool."""
+        if not self._poles:
+            return np.ones(len(lo), bool)
+        r = interval_eval(self._graph, [self._f], lo, hi)
+        return np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
+
     def _face(self, lo, hi, n, side):
         """The faces normal to ``n`` of boxes (side 0: low, 1: high), as degenerate boxes."""
         lo, hi = lo.copy(), hi.copy()
@@ -298,7 +310,7 @@ class ElementarySurface:
         """Whether the curve F + eps = 0 on faces (normal n) has no closed loop."""
         u, v = (n + 1) % 3, (n + 2) % 3
         r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
-        ok = _one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])
+        ok = (_one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])) & self._continuous(lo, hi)
         rest = np.nonzero(~ok)[0]
         if len(rest):
             # F of one sign on the face: centred form with the face's
@@ -317,7 +329,7 @@ class ElementarySurface:
         lo, hi = self.corners(data)
         result = np.full(len(data), -1, np.int64)
         r = interval_eval(self._graph, self._grad, lo, hi)
-        todo = np.arange(len(data))
+        todo = np.nonzero(self._continuous(lo, hi))[0]
         for a in range(3):
             ok = _one_sign(r.lo[a][todo], r.hi[a][todo])
             cand = todo[ok]
@@ -340,8 +352,9 @@ class ElementarySurface:
         lo, hi = self._face(lo, hi, n, side)
         u, v = (n + 1) % 3, (n + 2) % 3
         r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
-        over_u = _one_sign(r.lo[1], r.hi[1])
-        over_v = _one_sign(r.lo[0], r.hi[0])
+        cont = self._continuous(lo, hi)
+        over_u = _one_sign(r.lo[1], r.hi[1]) & cont
+        over_v = _one_sign(r.lo[0], r.hi[0]) & cont
         return np.where(over_u, 0, np.where(over_v, 1, 2)).astype(np.int64)
 
     def may_vanish(self, data: np.ndarray, axes=(0, 1, 2)) -> np.ndarray:
@@ -453,7 +466,8 @@ class ElementarySurface:
             flo, fhi = flo[maybe], fhi[maybe]
             if len(row) == 0:
                 break
-            mono = _one_sign(dl, dh)
+            # Monotone: F' of one sign and F bounded (no pole between).
+            mono = _one_sign(dl, dh) & np.isfinite(flo) & np.isfinite(fhi)
             small = ~mono & ((b - a) <= min_width[row])
             ends = np.nonzero(mono | small)[0]
             if len(ends):
@@ -482,9 +496,10 @@ class ElementarySurface:
                 hit = rest & np.isfinite(absv[best, np.arange(k)])
                 out_row.append(er[hit])
                 out_s.append(cand[best[hit], np.nonzero(hit)[0]])
-            # Pieces on which F is zero to rounding throughout (a line in the
-            # surface) have no isolated roots: dropped, as the polynomial
-            # path drops an identically zero line polynomial.
+            # Pieces on which F is zero to rounding throughout: one root at
+            # the middle, not split further (near a double root, F is below
+            # rounding on a piece of width ~ sqrt(eps); a line lying in the
+            # surface gets a root per such piece, which costs nothing).
             split = np.nonzero(~mono & ~small)[0]
             if len(split) == 0:
                 row = row[:0]
@@ -493,6 +508,8 @@ class ElementarySurface:
             c = (a + b) * 0.5
             _, (cm,) = values(row, c)
             flat = np.maximum(np.abs(flo[split]), np.abs(fhi[split])) <= tol.ZERO_ULPS * _EPS * cm
+            out_row.append(row[flat])
+            out_s.append(c[flat])
             row, a, b, c = row[~flat], a[~flat], b[~flat], c[~flat]
             row = np.concatenate([row, row])
             a, b = np.concatenate([a, c]), np.concatenate([c, b])
@@ -547,4 +564,10 @@ class ElementarySurface:
             active = active[~done]
         (fv,), (fm,) = point_eval(g, [f], pts(row, x), magnitude=True)
         good = np.abs(fv) <= tol.ELEMENTARY_ROOT_RESIDUAL * fm
+        if self._poles:
+            # A sign change across a pole: F is unbounded next to x.
+            delta = 4 * np.spacing(np.maximum(np.abs(a), np.abs(b))) + 1e-300
+            lo, hi = pts(row, x - delta), pts(row, x + delta)
+            r = interval_eval(g, [f], lo, hi)
+            good &= np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
         return x, good

@@ -172,7 +172,7 @@ def graph_jets(graph: Graph, output: int, points: np.ndarray, order: int) -> np.
         elif op == "abs":
             a = S[args[0]]
             s = np.where((a[:, 0] < 0)[:, None], -a, a)
-        elif op in ("sgn", "maxd", "mind"):  # pragma: no cover - only in derivative graphs
+        elif op in ("sgn", "maxd", "mind", "unit"):  # pragma: no cover - only in derivative graphs
             raise ValueError("jets are taken of F's graph, not of its derivatives")
         else:
             a = S[args[0]]
