@@ -163,17 +163,28 @@ class ElementarySurface:
         return f.reshape(shape), np.stack(g, -1).reshape(shape + (3,))
 
     def hessian(self, points) -> np.ndarray:
-        p, shape = self._points(points)
-        h = point_eval(self._graph, [self._hess[a][b] for a in range(3) for b in range(3)], p)
-        return np.stack(h, -1).reshape(shape + (3, 3))
+        """Hessian of F at ``points`` (..., 3): (..., 3, 3), from second-order jets."""
+        return self.jet(points)[2]
 
     def jet(self, points):
-        """F, grad F and the Hessian at ``points`` in one pass."""
+        """F, grad F and the Hessian at ``points`` in one pass (second-order Taylor jets).
+
+        Jets, not the derivative graph: they are defined where F is
+        analytic although an intermediate is not (cos(k sqrt(u)) at u = 0).
+        """
         p, shape = self._points(points)
-        nodes = [self._f] + self._grad + [self._hess[a][b] for a in range(3) for b in range(3)]
-        v = point_eval(self._graph, nodes, p)
-        return (v[0].reshape(shape), np.stack(v[1:4], -1).reshape(shape + (3,)),
-                np.stack(v[4:], -1).reshape(shape + (3, 3)))
+        sp = jet_space(2)
+        t = graph_jets(self._graph, self._f, p, 2)
+        e = sp.index
+        g = t[:, [e[(1, 0, 0)], e[(0, 1, 0)], e[(0, 0, 1)]]]
+        h = np.empty((len(p), 3, 3))
+        for a in range(3):
+            for b in range(3):
+                k = [0, 0, 0]
+                k[a] += 1
+                k[b] += 1
+                h[:, a, b] = t[:, e[tuple(k)]] * (2.0 if a == b else 1.0)
+        return t[:, 0].reshape(shape), g.reshape(shape + (3,)), h.reshape(shape + (3, 3))
 
     def magnitude(self, points) -> np.ndarray:
         """Size of F's terms at ``points``: the scale of its rounding error."""

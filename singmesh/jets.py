@@ -177,5 +177,36 @@ def graph_jets(graph: Graph, output: int, points: np.ndarray, order: int) -> np.
         else:
             a = S[args[0]]
             s = sp.compose(_univariate(op, a[:, 0], order, p), a)
+            if op in ("cos", "cosh"):
+                s = _even_of_sqrt(graph, sp, S, op, args[0], s)
         S[n] = s
     return S[output]
+
+
+def _even_of_sqrt(graph: Graph, sp: JetSpace, S: dict, op: str, arg: int, s: np.ndarray) -> np.ndarray:
+    """cos(c sqrt(u)) and cosh(c sqrt(u)) where u = 0: the series in u.
+
+    They are analytic in u (sum (-+c^2 u)^j / (2j)!) although sqrt(u) is
+    not at u = 0: seed 000's cosine bump cos(k sqrt((y-py)^2 + (z-pz)^2))
+    on its axis, where it attaches a singular point.
+    """
+    c = 1.0
+    node = arg
+    if graph.ops[node] == "mul":
+        a, b = graph.args[node]
+        if graph.ops[a] == "const" and graph.ops[b] == "sqrt":
+            c, node = graph.params[a][0], b
+        elif graph.ops[b] == "const" and graph.ops[a] == "sqrt":
+            c, node = graph.params[b][0], a
+    if graph.ops[node] != "sqrt":
+        return s
+    u = S[graph.args[node][0]]
+    at = u[:, 0] == 0
+    if not at.any():
+        return s
+    n = sp.order
+    sign = -1.0 if op == "cos" else 1.0
+    coeffs = np.array([(sign * c * c) ** j / factorial(2 * j) for j in range(n + 1)])
+    s = s.copy()
+    s[at] = sp.compose(np.broadcast_to(coeffs, (int(at.sum()), n + 1)), u[at])
+    return s

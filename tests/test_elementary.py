@@ -229,6 +229,14 @@ def test_may_vanish_keeps_a1_attached_by_cosine_bump():
     box = np.array([[-3.0, 1.0], [-2.5, 2.5], [-2.5, 2.5]])
     data, inside = _kept_boxes_containing(s, box, 5, p)
     assert inside.any()
+    # Its jet (through the bump's cos(k sqrt(r2)) at r2 = 0): an A1,
+    # the Hessian nondegenerate and indefinite, as the second differences say.
+    t = s.taylor(p, 2)
+    assert np.all(np.isfinite(t)) and abs(t[0, 0, 0]) < 1e-14
+    assert np.abs([t[1, 0, 0], t[0, 1, 0], t[0, 0, 1]]).max() < 1e-12
+    ev = np.linalg.eigvalsh(s.hessian(p))
+    assert np.all(np.abs(ev) > 0.1) and ev.min() < 0 < ev.max()
+    np.testing.assert_allclose(np.diag(s.hessian(p)), second, rtol=1e-4)
 
 
 def test_errors_and_domains():
@@ -247,3 +255,18 @@ def test_errors_and_domains():
     assert s.undefined_on(data)[0] == "sqrt(x)"
     with pytest.raises(SurfaceError, match="not a number|not a finite"):
         ElementarySurface.from_expr(x + sympy.log(-1 + 0 * y + sympy.Integer(0)), "log(-1)")
+
+
+def test_jet_of_cosine_bump_on_its_axis():
+    """cos(k sqrt(r2)) is analytic in r2: its jet on the axis r2 = 0 (where sqrt is not) is finite and right."""
+    k = 1.3
+    expr = x + cos(k * sqrt((y - 0.2) ** 2 + (z + 0.1) ** 2))
+    s = ElementarySurface.from_expr(expr, "bump")
+    t = s.taylor(np.array([0.5, 0.2, -0.1]), 4)
+    # cos(k r) = 1 - k^2 r^2 / 2 + k^4 r^4 / 24 with r^2 = v^2 + w^2.
+    assert t[0, 0, 0] == pytest.approx(1.5) and t[1, 0, 0] == pytest.approx(1.0)
+    assert t[0, 2, 0] == pytest.approx(-k**2 / 2) and t[0, 0, 2] == pytest.approx(-k**2 / 2)
+    assert t[0, 4, 0] == pytest.approx(k**4 / 24) and t[0, 2, 2] == pytest.approx(k**4 / 12)
+    assert abs(t[0, 1, 1]) < 1e-15 and abs(t[0, 3, 0]) < 1e-15
+    h = s.hessian(np.array([0.5, 0.2, -0.1]))
+    np.testing.assert_allclose(h, np.diag([0.0, -k**2, -k**2]), atol=1e-14)
