@@ -161,6 +161,9 @@ class Graph:
                 return "xyz".index(e.name)
             raise SurfaceError(f"unknown symbol {e.name}")
         if e.is_Add:
+            r = self._rfunction(e)
+            if r is not None:
+                return r
             nodes = [self.from_sympy(a) for a in e.args]
             out = nodes[0]
             for n in nodes[1:]:
@@ -202,6 +205,31 @@ class Graph:
         raise SurfaceError(
             f"unsupported function {name} in {e}: use + - * /, powers, sqrt, abs, min, max, "
             "exp, log, sin, cos, tan, sinh, cosh, tanh")
+
+    def _rfunction(self, e: sympy.Add) -> int | None:
+        """The node of an R-function f + g +- sqrt(f^2 + g^2), or None.
+
+        It increases with f and with g, so its bounds on a box are its
+        values at the ends of theirs: no overestimation from the
+        cancellation between f + g and the root (seed 000's CSG forms).
+        """
+        for t in e.args:
+            sign = 1
+            root = t
+            if t.is_Mul and len(t.args) == 2 and t.args[0] == -1:
+                sign, root = -1, t.args[1]
+            if not (root.is_Pow and root.exp == sympy.S.Half and root.base.is_Add
+                    and len(root.base.args) == 2
+                    and all(a.is_Pow and a.exp == 2 for a in root.base.args)):
+                continue
+            f, g = (a.base for a in root.base.args)
+            rest = e - t
+            if rest - f - g != 0:
+                continue
+            nf, ng = self.from_sympy(f), self.from_sympy(g)
+            sq = self.from_sympy(root)
+            return self.node("rfun", (nf, ng, sq), sign)
+        return None
 
     def _constant(self, c: sympy.Expr) -> int:
         try:
@@ -300,6 +328,15 @@ class Graph:
             return self.node(op, tuple(args[:m]) + tuple(self.diff(b, v) for b in args[m:]))
         elif op == "sgn":
             return self.zero
+        elif op == "rfun":
+            # (1 +- f / r) f' + (1 +- g / r) g', each factor in [0, 2].
+            f, g, r = args
+            sign = self.const(float(p))
+            out = self.zero
+            for h in (f, g):
+                factor = self.add(self.one, self.mul(sign, self.node("unit", (h, r))))
+                out = self.add(out, self.mul(factor, self.diff(h, v)))
+            return out
         elif op == "unit":
             # d(f/r) = (f' - (f/r) r') / r
             f, r = args
@@ -418,6 +455,32 @@ def _periodic(lo, hi, fn, top, bottom, period=2 * _PI):
     nan = np.isnan(lo) | np.isnan(hi)
     return (np.where(nan, np.nan, np.maximum(rlo, -1.0)),
             np.where(nan, np.nan, np.minimum(rhi, 1.0)))
+
+
+def _rfun(fl, fh, gl, gh, rl, rh, sign):
+    """Bounds of f + g + sign sqrt(f^2 + g^2) (increasing in f and g).
+
+    The values at (fl, gl) and (fh, gh), each rounded outwards; where
+    those are not finite, the plain sum's bounds (r = [rl, rh] the root's).
+    """
+    def root(f, g, up):
+        if up:
+            return _up(np.sqrt(_up(_up(f * f) + _up(g * g))))
+        return _down(np.sqrt(np.maximum(_down(_down(f * f) + _down(g * g)), 0.0)))
+
+    with np.errstate(invalid="ignore", over="ignore"):
+        if sign > 0:
+            lo = _down(_down(fl + gl) + root(fl, gl, False))
+            hi = _up(_up(fh + gh) + root(fh, gh, True))
+            plain_lo, plain_hi = _down(_down(fl + gl) + rl), _up(_up(fh + gh) + rh)
+        else:
+            lo = _down(_down(fl + gl) - root(fl, gl, True))
+            hi = _up(_up(fh + gh) - root(fh, gh, False))
+            plain_lo, plain_hi = _down(_down(fl + gl) - rh), _up(_up(fh + gh) - rl)
+    lo = np.where(np.isfinite(lo), np.fmax(lo, plain_lo), plain_lo)
+    hi = np.where(np.isfinite(hi), np.fmin(hi, plain_hi), plain_hi)
+    nan = np.isnan(fl) | np.isnan(gl) | np.isnan(fh) | np.isnan(gh)
+    return np.where(nan, np.nan, lo), np.where(nan, np.nan, hi)
 
 
 class IntervalResult:
@@ -541,6 +604,8 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray) -> Inte
                 rh = np.where(ah < 0, -1.0, 1.0)
                 nan = np.isnan(al) | np.isnan(ah)
                 rl, rh = np.where(nan, np.nan, rl), np.where(nan, np.nan, rh)
+            elif op == "rfun":
+                rl, rh = _rfun(al, ah, L[args[1]], H[args[1]], L[args[2]], H[args[2]], p)
             elif op == "unit":
                 # f / r with |f| <= r: in [-1, 1] whatever the quotient's bounds.
                 il, ih = _recip(L[args[1]], H[args[1]])
@@ -648,6 +713,10 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                 # NaN anywhere makes the result NaN (max would too).
                 if magnitude:
                     M[n] = np.stack([M[b] for b in args]).max(axis=0)
+            elif op == "rfun":
+                r = a + V[args[1]] + p * V[args[2]]
+                if magnitude:
+                    M[n] = M[args[0]] + M[args[1]] + M[args[2]]
             elif op == "unit":
                 den = V[args[1]]
                 r = np.where(den == 0, 0.0, a / np.where(den == 0, 1.0, den))

@@ -169,6 +169,8 @@ def graph_jets(graph: Graph, output: int, points: np.ndarray, order: int) -> np.
             stack = np.stack([S[b] for b in args])
             s = np.take_along_axis(stack, pick[None, :, None], 0)[0]
             s = np.where(np.isnan(vals).any(axis=0)[:, None], np.nan, s)
+        elif op == "rfun":
+            s = S[args[0]] + S[args[1]] + p * S[args[2]]
         elif op == "abs":
             a = S[args[0]]
             s = np.where((a[:, 0] < 0)[:, None], -a, a)

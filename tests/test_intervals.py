@@ -23,6 +23,9 @@ EXPRESSIONS = [
     Abs(x), Abs(x - y) - Abs(z), Min(x, y, z), Max(x, y**2, -z), Max(x**2 + y**2 + z**2 - 1, z),
     exp(x), exp(-20 * x) / (1 + exp(-20 * y)), log(x), log(x**2 + y), sin(x), cos(x), sin(3 * x + y),
     cos(x * y), tan(x), tan(x + y), sinh(x), cosh(x), tanh(x), tanh(5 * x - y),
+    # R-functions (seed 000's CSG): intersection and union, nested.
+    x + y - sqrt(x**2 + y**2), (x**2 - 1) + z + sqrt((x**2 - 1)**2 + z**2),
+    (x - y + z - sqrt((x - y)**2 + z**2)) + y + sqrt((x - y + z - sqrt((x - y)**2 + z**2))**2 + y**2),
     sin(x) * cos(y) + sin(y) * cos(z) + sin(z) * cos(x), sin(1 / x), Rational(1, 3) * x - sympy.pi * y,
 ]
 
@@ -149,3 +152,16 @@ def test_special_ranges():
     assert r.lo[4][1] == -np.inf and r.hi[4][1] == np.inf                          # 1/[-0.5, 0.5]
     assert np.isnan(r.lo[5][3]) and np.isnan(r.lo[6][3])                           # sqrt, log of [-2, -1]: undefined
     assert r.clipped[1] and not r.clipped[0]                                      # sqrt of [-0.5, 0.5] clipped
+
+
+def test_rfunction_bounds_are_tight():
+    """f + g - sqrt(f^2 + g^2) is increasing in f and g: its bounds are its corner values."""
+    g = Graph()
+    n = g.from_sympy(x + y - sqrt(x**2 + y**2))
+    assert g.ops[n] == "rfun"
+    lo = np.array([[-0.5, -0.4, 0.0]])
+    hi = np.array([[0.3, 0.2, 0.0]])
+    r = interval_eval(g, [n], lo, hi)
+    want_lo = -0.9 - np.hypot(0.5, 0.4)
+    want_hi = 0.5 - np.hypot(0.3, 0.2)
+    assert want_lo - 1e-15 <= r.lo[0][0] <= want_lo and want_hi <= r.hi[0][0] <= want_hi + 1e-15

@@ -18,6 +18,7 @@ FUNCTIONS = [
     (x**2 + 1) ** Rational(1, 3) - y, 1 / (1 + x**2 + y**2) - z, Abs(x - 3) + y**3 - z,
     Max(x**2 + y**2 + z**2 - 1, z - 5), Min(x, y - 7) + z, x**-3 * y - z + 2,
     1 / (1 + exp(-20 * (x**2 + y**2 + z**2 - 1))) - Rational(1, 2),
+    (x**2 - 1) + z + sqrt((x**2 - 1)**2 + z**2) - y, sqrt(x**2 + y**2) - 1 + z**2,
 ]
 
 
