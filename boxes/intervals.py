@@ -483,6 +483,36 @@ def _rfun(fl, fh, gl, gh, rl, rh, sign):
     return np.where(nan, np.nan, lo), np.where(nan, np.nan, hi)
 
 
+def kink_key(graph: Graph, n: int):
+    """The key of a max, min or abs node for ``interval_eval``'s ``force``."""
+    op = graph.ops[n]
+    return ("abs", graph.args[n][0]) if op == "abs" else (op, tuple(graph.args[n]))
+
+
+def kink_pieces(graph: Graph, kinks, lo, hi) -> list[np.ndarray]:
+    """Which pieces of each kink node may be active on each box: (N, m) bool each.
+
+    A max's argument i is active where its upper bound reaches the largest
+    lower bound (a min's: the other way); abs has the pieces (+, -).
+    """
+    args = sorted({a for k in kinks for a in graph.args[k]})
+    r = interval_eval(graph, args, lo, hi)
+    L = dict(zip(args, r.lo))
+    H = dict(zip(args, r.hi))
+    out = []
+    for k in kinks:
+        op, a = graph.ops[k], graph.args[k]
+        if op == "abs":
+            out.append(np.stack([H[a[0]] >= 0, L[a[0]] <= 0], 1))
+        elif op == "max":
+            floor = np.maximum.reduce([L[b] for b in a])
+            out.append(np.stack([H[b] >= floor for b in a], 1))
+        else:
+            ceil = np.minimum.reduce([H[b] for b in a])
+            out.append(np.stack([L[b] <= ceil for b in a], 1))
+    return out
+
+
 class IntervalResult:
     """Bounds of the outputs on N boxes.
 
@@ -496,11 +526,16 @@ class IntervalResult:
         self.lo, self.hi, self.clipped = lo, hi, clipped
 
 
-def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray) -> IntervalResult:
+def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: dict | None = None) -> IntervalResult:
     """Bounds of the output nodes on the boxes [lo, hi] (each (N, 3)).
 
     Every true value of an output at a point of a box where it is defined
     lies in the bounds (outward rounding throughout).
+
+    ``force`` maps a kink (:func:`kink_key` of a max, min or abs node) to
+    the piece chosen on each box, (N,) int (for abs: 0 the positive
+    piece, 1 the negative one): the derivatives at that kink are then the
+    chosen piece's alone, NaN where that piece is not active on the box.
     """
     lo = np.asarray(lo, float)
     hi = np.asarray(hi, float)
@@ -602,6 +637,11 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray) -> Inte
             elif op == "sgn":
                 rl = np.where(al > 0, 1.0, -1.0)
                 rh = np.where(ah < 0, -1.0, 1.0)
+                key = ("abs", args[0])
+                if force and key in force:
+                    neg = force[key] == 1
+                    rl = np.where(neg, np.where(al <= 0, -1.0, np.nan), np.where(ah >= 0, 1.0, np.nan))
+                    rh = rl
                 nan = np.isnan(al) | np.isnan(ah)
                 rl, rh = np.where(nan, np.nan, rl), np.where(nan, np.nan, rh)
             elif op == "rfun":
@@ -624,6 +664,10 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray) -> Inte
                 else:
                     ceil = np.minimum.reduce(vh)
                     active = [low <= ceil for low in vl]
+                key = (op[:3], tuple(args[:m]))
+                if force and key in force:
+                    pick = force[key]
+                    active = [act & (pick == j) for j, act in enumerate(active)]
                 rl = np.full(n_boxes, np.inf)
                 rh = np.full(n_boxes, -np.inf)
                 for act, d in zip(active, args[m:]):

@@ -37,13 +37,14 @@ caller that prefers an error.
 
 from __future__ import annotations
 
+import itertools
 from typing import Mapping
 
 import numpy as np
 import sympy
 
 from singmesh import tolerances as tol
-from singmesh.boxes.intervals import Graph, interval_eval, point_eval
+from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
 from singmesh.syntax import VARIABLES, read_equation
@@ -100,6 +101,7 @@ class ElementarySurface:
         self._hess = [[g.diff(self._grad[a], b) for b in range(3)] for a in range(3)]
         # Whether F can have poles (then a derivative of one sign does not
         # make F monotone on a box unless F is bounded there).
+        self._kinks = [n for n in g.plan([self._f]) if g.ops[n] in ("abs", "max", "min")]
         self._poles = any(
             g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
             for n in g.plan([self._f]))
@@ -371,20 +373,60 @@ class ElementarySurface:
     def may_vanish(self, data: np.ndarray, axes=(0, 1, 2)) -> np.ndarray:
         """F and its partial derivatives along ``axes`` may all vanish on the box: (N,) bool.
 
-        The derivative bounds enclose every piece's derivative at kinks, so
-        a box on a crease of Min/Max/Abs passes whenever the bounds of the
-        pieces' derivatives together straddle 0.
+        At kinks (Abs, Min, Max) a box passes when some one piece active on
+        it may have F and those derivatives all zero: every combination of
+        the pieces of the kinks that straddle the box is tried (a crease
+        where no piece is singular, the cube's edges, is not a candidate).
+        Beyond ``KINK_COMBINATIONS`` combinations the box passes.  The
+        continuous kinks of R-functions (sqrt(f^2 + g^2) where f = g = 0)
+        keep the hull of the derivatives: their creases pass.
         """
         lo, hi = self.corners(data)
-        keep = np.ones(len(data), bool)
-        idx = np.arange(len(data))
-        r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi)
-        for k in range(len(axes)):
-            gl, gh = r.lo[k], r.hi[k]
-            s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
-            keep &= (gl <= s) & (gh >= -s)
-        idx = idx[keep]
-        if len(idx):
+        keep = self._may_vanish(lo, hi, axes, None)
+        idx = np.nonzero(keep)[0]
+        if len(idx) == 0 or not self._kinks:
+            return keep
+        pieces = kink_pieces(self._graph, self._kinks, lo[idx], hi[idx])
+        flags = np.concatenate(pieces, axis=1)
+        straddle = np.stack([p.sum(axis=1) > 1 for p in pieces], 1)
+        some = straddle.any(axis=1)
+        if not some.any():
+            return keep
+        idx, flags = idx[some], flags[some]
+        patterns, inverse = np.unique(flags, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        widths = [p.shape[1] for p in pieces]
+        starts = np.concatenate([[0], np.cumsum(widths)])
+        for g_i, pattern in enumerate(patterns):
+            members = idx[inverse == g_i]
+            choices = []
+            for k, node in enumerate(self._kinks):
+                act = np.nonzero(pattern[starts[k]:starts[k + 1]])[0]
+                if len(act) > 1:
+                    choices.append((kink_key(self._graph, node), act))
+            n_combos = int(np.prod([len(c[1]) for c in choices]))
+            if n_combos > tol.KINK_COMBINATIONS:
+                continue  # kept: too many pieces to try
+            found = np.zeros(len(members), bool)
+            for combo in itertools.product(*[c[1] for c in choices]):
+                force = {c[0]: np.full(len(members), j) for c, j in zip(choices, combo)}
+                found |= self._may_vanish(lo[members], hi[members], axes, force, value=False)
+                if found.all():
+                    break
+            keep[members] = found
+        return keep
+
+    def _may_vanish(self, lo, hi, axes, force, value=True):
+        """The hull test of may_vanish (with pieces forced at kinks: derivatives only)."""
+        keep = np.ones(len(lo), bool)
+        if len(axes):
+            r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi, force=force)
+            for k in range(len(axes)):
+                gl, gh = r.lo[k], r.hi[k]
+                s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+                keep &= (gl <= s) & (gh >= -s)
+        idx = np.nonzero(keep)[0]
+        if value and len(idx):
             flo, fhi = self._value_bounds(lo[idx], hi[idx])
             slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(np.abs(flo), np.abs(fhi)),
                                self._slack(flo, fhi, lo[idx], hi[idx]))

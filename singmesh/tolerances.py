@@ -375,3 +375,8 @@ ELEMENTARY_ROOT_RESIDUAL = 1e-8
 #: Safeguarded Newton (bisection when a step leaves the bracket) on
 #: sign-change brackets of lattice lines: at most this many steps.
 ELEMENTARY_ROOT_STEPS = 100
+
+#: may_vanish of a non-polynomial F tries every combination of the pieces
+#: of the kinks (Abs, Min, Max) straddling a box, up to this many; a box
+#: with more passes untested (never dropped).
+KINK_COMBINATIONS = 64

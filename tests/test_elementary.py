@@ -270,3 +270,20 @@ def test_jet_of_cosine_bump_on_its_axis():
     assert abs(t[0, 1, 1]) < 1e-15 and abs(t[0, 3, 0]) < 1e-15
     h = s.hessian(np.array([0.5, 0.2, -0.1]))
     np.testing.assert_allclose(h, np.diag([0.0, -k**2, -k**2]), atol=1e-14)
+
+
+def test_may_vanish_at_kinks_tries_the_pieces():
+    """A crease is no candidate unless an active piece is singular there."""
+    box = np.array([[-1.0, 1.1]] * 3)
+    for expr in (Max(Abs(x), Abs(y), Abs(z)) - 0.7, Max(x**2 + y**2 + z**2 - 1, z),
+                 sympy.Min(x + y, 2 * z - x) - Abs(y - 0.3)):
+        s = ElementarySurface.from_expr(expr, str(expr))
+        data = _subdivide(s, box, 6, lambda d: s.may_vanish(d, (0, 1, 2)))
+        assert len(data) == 0, expr
+        # The surface is there: the boxes with F of both signs are many.
+        data = _subdivide(s, box, 4, lambda d: ~s.excludes_zero(d))
+        assert len(data) > 50
+    # A cone's apex on the crease with the plane z = 0: both pieces active, the cone's singular.
+    s = ElementarySurface.from_expr(Max(x**2 + y**2 - z**2, z), "cone")
+    data, inside = _kept_boxes_containing(s, box, 6, np.zeros(3))
+    assert inside.any() and len(data) < 40
