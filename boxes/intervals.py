@@ -46,6 +46,9 @@ FUNCTION_ULPS = 8.0
 _EPS = float(np.finfo(float).eps)
 _TINY = 1e-300
 _BIG = float(np.finfo(float).max)
+#: Lower bounds this far below 0 are rounding slop of exact zeros
+#: (nextafter(0, -inf) after a sum of squares), not a box leaving a domain.
+_SLOP = 1e-300
 _PI = math.pi
 
 
@@ -421,7 +424,7 @@ def _powi(lo, hi, n):
         return _recip(plo, phi)
     if n == 2:
         mig, mag = _mig_mag(lo, hi)
-        return _down(mig * mig), _up(mag * mag)
+        return np.maximum(_down(mig * mig), 0.0), _up(mag * mag)
     if n == 1:
         return lo, hi
     with np.errstate(over="ignore", invalid="ignore"):
@@ -577,12 +580,12 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
             elif op == "powi":
                 rl, rh = _powi(al, ah, p)
             elif op == "sqrt":
-                clipped |= al < 0
+                clipped |= al < -_SLOP
                 rl = _down(np.sqrt(np.maximum(al, 0.0)))
                 rh = _up(np.sqrt(ah))
                 rl = np.where(ah < 0, np.nan, np.maximum(rl, 0.0))
             elif op == "powr":
-                clipped |= al < 0 if p > 0 else al <= 0
+                clipped |= al < -_SLOP if p > 0 else al <= _SLOP
                 x0 = np.maximum(al, 0.0)
                 a, b = np.power(x0, p), np.power(ah, p)
                 rl, rh = (a, b) if p > 0 else (b, a)
@@ -598,7 +601,7 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
                 rl, rh = _widen(np.exp(al), np.exp(ah))
                 rl = np.maximum(rl, 0.0)
             elif op == "log":
-                clipped |= al <= 0
+                clipped |= al <= _SLOP
                 rl, rh = _widen(np.log(np.maximum(al, 0.0)), np.log(ah))
                 bad = ah <= 0
                 rl, rh = np.where(bad, np.nan, rl), np.where(bad, np.nan, rh)

@@ -323,7 +323,8 @@ class ElementarySurface:
         """Whether the curve F + eps = 0 on faces (normal n) has no closed loop."""
         u, v = (n + 1) % 3, (n + 2) % 3
         r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
-        ok = (_one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])) & self._continuous(lo, hi)
+        # A face partly outside F's domain may hold an end of the surface.
+        ok = (_one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])) & self._continuous(lo, hi) & ~r.clipped
         rest = np.nonzero(~ok)[0]
         if len(rest):
             # F of one sign on the face: centred form with the face's
@@ -333,7 +334,7 @@ class ElementarySurface:
             grad[u] = (r.lo[0][rest], r.hi[0][rest])
             grad[v] = (r.lo[1][rest], r.hi[1][rest])
             flo, fhi = self._value_bounds(lo[rest], hi[rest], grad=grad)
-            ok[rest] = (flo >= 0) | (fhi < 0)
+            ok[rest] = ((flo >= 0) | (fhi < 0)) & ~r.clipped[rest]
         return ok
 
     def simple_axis(self, data: np.ndarray) -> np.ndarray:
@@ -342,7 +343,9 @@ class ElementarySurface:
         lo, hi = self.corners(data)
         result = np.full(len(data), -1, np.int64)
         r = interval_eval(self._graph, self._grad, lo, hi)
-        todo = np.nonzero(self._continuous(lo, hi))[0]
+        # Not simple: boxes with a pole, and boxes partly outside F's domain
+        # (the surface may end inside them).
+        todo = np.nonzero(self._continuous(lo, hi) & ~r.clipped)[0]
         for a in range(3):
             ok = _one_sign(r.lo[a][todo], r.hi[a][todo])
             cand = todo[ok]
@@ -365,7 +368,7 @@ class ElementarySurface:
         lo, hi = self._face(lo, hi, n, side)
         u, v = (n + 1) % 3, (n + 2) % 3
         r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
-        cont = self._continuous(lo, hi)
+        cont = self._continuous(lo, hi) & ~r.clipped
         over_u = _one_sign(r.lo[1], r.hi[1]) & cont
         over_v = _one_sign(r.lo[0], r.hi[0]) & cont
         return np.where(over_u, 0, np.where(over_v, 1, 2)).astype(np.int64)
@@ -510,17 +513,19 @@ class ElementarySurface:
             lo, hi = boxes(row, a, b)
             r = interval_eval(g, [d], lo, hi)
             dl, dh = r.lo[0], r.hi[0]
+            clipped = r.clipped
             grad = [(np.zeros(len(row)), np.zeros(len(row))) for _ in range(3)]
             grad[axis] = (dl, dh)
             flo, fhi = self._value_bounds(lo, hi, grad=grad)
             slack = self._slack(flo, fhi, lo, hi)
             maybe = (flo <= slack) & (fhi >= -slack)
-            row, a, b, dl, dh = row[maybe], a[maybe], b[maybe], dl[maybe], dh[maybe]
+            row, a, b, dl, dh, clipped = row[maybe], a[maybe], b[maybe], dl[maybe], dh[maybe], clipped[maybe]
             flo, fhi = flo[maybe], fhi[maybe]
             if len(row) == 0:
                 break
-            # Monotone: F' of one sign and F bounded (no pole between).
-            mono = _one_sign(dl, dh) & np.isfinite(flo) & np.isfinite(fhi)
+            # Monotone: F' of one sign and F bounded (no pole between) and
+            # defined on the whole piece (its end values are then read).
+            mono = _one_sign(dl, dh) & np.isfinite(flo) & np.isfinite(fhi) & ~clipped
             small = ~mono & ((b - a) <= min_width[row])
             ends = np.nonzero(mono | small)[0]
             if len(ends):

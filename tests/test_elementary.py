@@ -99,6 +99,10 @@ def test_line_roots_double_roots_and_poles():
     s = ElementarySurface.parse("1/x - 1 + 0*y")
     row, r = s.line_roots(0, np.array([[0.3, 0.1]]), np.array([-2.0]), np.array([2.0]))
     assert len(r) >= 1 and np.all(np.abs(r - 1) < 1e-15)
+    # sqrt(x) - 0.5 on [-1, 1]: the root 0.25, none where F is undefined.
+    s = ElementarySurface.parse("sqrt(x) - 0.5 + y - y")
+    row, r = s.line_roots(0, np.array([[0.3, 0.1]]), np.array([-1.0]), np.array([1.0]))
+    assert len(r) >= 1 and np.all(np.abs(r - 0.25) < 1e-15)
     # tan(x) - 1 on [-1, 5]: roots at pi/4 and 5 pi/4, none at the pole pi/2.
     s = ElementarySurface.parse("tan(x) - 1 + y - y")
     row, r = s.line_roots(0, np.array([[0.3, 0.1]]), np.array([-1.0]), np.array([5.0]))
