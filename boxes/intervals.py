@@ -689,9 +689,14 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
 
 
 # ------------------------------------------------------------------ points
+def _sgn(a):
+    """Abs's slope at points: that of the positive piece at 0 (as the jets take it)."""
+    return np.where(a < 0, -1.0, np.where(np.isnan(a), np.nan, 1.0))
+
+
 _UNARY = {"exp": np.exp, "log": np.log, "sin": np.sin, "cos": np.cos, "tan": np.tan,
           "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "abs": np.abs, "sqrt": np.sqrt,
-          "sgn": np.sign}
+          "sgn": _sgn}
 
 
 def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = False):

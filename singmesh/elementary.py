@@ -282,6 +282,43 @@ class ElementarySurface:
         fhi[sel] = np.where(ok, np.minimum(fhi[sel], ch), fhi[sel])
         return flo, fhi
 
+    def _gradient_bounds(self, lo, hi, comps):
+        """Bounds of the partial derivatives ``comps`` on boxes: an IntervalResult.
+
+        The natural extension, intersected where it straddles 0 with the
+        centred form F_a(c) + [grad F_a](box) . (box - c) when F has no
+        Abs/Min/Max (their derivatives jump: the Hessian graph does not
+        see the jump) and the box lies in F's domain.  Sigmoid blends'
+        derivatives lose a factor of several to dependency otherwise.
+        """
+        g = self._graph
+        r = interval_eval(g, [self._grad[a] for a in comps], lo, hi)
+        if self._kinks:
+            return r
+        for k, a in enumerate(comps):
+            gl, gh = r.lo[k], r.hi[k]
+            sel = np.nonzero((gl <= 0) & (gh >= 0) & ~r.clipped)[0]
+            if len(sel) == 0:
+                continue
+            l, h = lo[sel], hi[sel]
+            c = (l + h) * 0.5
+            moving = [b for b in range(3) if np.any(h[:, b] > l[:, b])]
+            hb = interval_eval(g, [self._hess[a][b] for b in moving], l, h)
+            gc = interval_eval(g, [self._grad[a]], c, c)
+            cl, ch = gc.lo[0], gc.hi[0]
+            for j, b in enumerate(moving):
+                dl = np.nextafter(l[:, b] - c[:, b], -np.inf)
+                dh = np.nextafter(h[:, b] - c[:, b], np.inf)
+                pl, ph = _imul(hb.lo[j], hb.hi[j], np.minimum(dl, 0.0), np.maximum(dh, 0.0))
+                cl = np.nextafter(cl + pl, -np.inf)
+                ch = np.nextafter(ch + ph, np.inf)
+            ok = np.isfinite(cl) & np.isfinite(ch) & ~hb.clipped
+            r.lo[k] = gl.copy()
+            r.hi[k] = gh.copy()
+            r.lo[k][sel] = np.where(ok, np.maximum(gl[sel], cl), gl[sel])
+            r.hi[k][sel] = np.where(ok, np.minimum(gh[sel], ch), gh[sel])
+        return r
+
     def _slack(self, flo, fhi, lo, hi):
         """Room for rounding when reading F's bounds: PRUNE_SLACK of their size,
         and at least F's rounding error at the box centre where that matters."""
@@ -322,7 +359,7 @@ class ElementarySurface:
     def _face_without_loops(self, lo, hi, n):
         """Whether the curve F + eps = 0 on faces (normal n) has no closed loop."""
         u, v = (n + 1) % 3, (n + 2) % 3
-        r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
+        r = self._gradient_bounds(lo, hi, (u, v))
         # A face partly outside F's domain may hold an end of the surface.
         ok = (_one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])) & self._continuous(lo, hi) & ~r.clipped
         rest = np.nonzero(~ok)[0]
@@ -342,7 +379,7 @@ class ElementarySurface:
         F = 0 on both faces normal to a has no closed loop, else -1: (N,) int64."""
         lo, hi = self.corners(data)
         result = np.full(len(data), -1, np.int64)
-        r = interval_eval(self._graph, self._grad, lo, hi)
+        r = self._gradient_bounds(lo, hi, (0, 1, 2))
         # Not simple: boxes with a pole, and boxes partly outside F's domain
         # (the surface may end inside them).
         todo = np.nonzero(self._continuous(lo, hi) & ~r.clipped)[0]
@@ -367,7 +404,7 @@ class ElementarySurface:
         lo, hi = self.corners(data)
         lo, hi = self._face(lo, hi, n, side)
         u, v = (n + 1) % 3, (n + 2) % 3
-        r = interval_eval(self._graph, [self._grad[u], self._grad[v]], lo, hi)
+        r = self._gradient_bounds(lo, hi, (u, v))
         cont = self._continuous(lo, hi) & ~r.clipped
         over_u = _one_sign(r.lo[1], r.hi[1]) & cont
         over_v = _one_sign(r.lo[0], r.hi[0]) & cont
@@ -423,7 +460,10 @@ class ElementarySurface:
         """The hull test of may_vanish (with pieces forced at kinks: derivatives only)."""
         keep = np.ones(len(lo), bool)
         if len(axes):
-            r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi, force=force)
+            if force is None:
+                r = self._gradient_bounds(lo, hi, tuple(axes))
+            else:
+                r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi, force=force)
             for k in range(len(axes)):
                 gl, gh = r.lo[k], r.hi[k]
                 s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
@@ -511,7 +551,7 @@ class ElementarySurface:
             if len(row) == 0:
                 break
             lo, hi = boxes(row, a, b)
-            r = interval_eval(g, [d], lo, hi)
+            r = self._gradient_bounds(lo, hi, (axis,))
             dl, dh = r.lo[0], r.hi[0]
             clipped = r.clipped
             grad = [(np.zeros(len(row)), np.zeros(len(row))) for _ in range(3)]

@@ -291,3 +291,28 @@ def test_may_vanish_at_kinks_tries_the_pieces():
     s = ElementarySurface.from_expr(Max(x**2 + y**2 - z**2, z), "cone")
     data, inside = _kept_boxes_containing(s, box, 6, np.zeros(3))
     assert inside.any() and len(data) < 40
+
+
+@pytest.mark.parametrize("name", ["sigmoid-union", "gyroid", "sqrt-torus"])
+def test_gradient_bounds_enclose_difference_quotients(name):
+    """The centred gradient bounds (second-order) hold every difference quotient on small boxes."""
+    expr, reach = SURFACES[name]
+    s = ElementarySurface.from_expr(expr, name)
+    f = _fn(expr)
+    rng = np.random.default_rng(5)
+    lo = rng.uniform(-reach, reach, (400, 3))
+    hi = lo + 10.0 ** rng.uniform(-3, -1, (400, 1))
+    r = s._gradient_bounds(lo, hi, (0, 1, 2))
+    for a in range(3):
+        p = lo[:, None] + rng.random((400, 30, 3)) * (hi - lo)[:, None]
+        q = p.copy()
+        q[..., a] = hi[:, None, a]
+        step = q[..., a] - p[..., a]
+        quotient = (f(q) - f(p)) / step
+        err = 1e-12 / step
+        ok = (step <= 0) | ((quotient >= r.lo[a][:, None] - err) & (quotient <= r.hi[a][:, None] + err))
+        assert ok.all()
+    # Tighter than the natural extension somewhere (the centred form is used).
+    from singmesh.boxes.intervals import interval_eval
+    nat = interval_eval(s._graph, s._grad, lo, hi)
+    assert all(np.all(r.hi[a] - r.lo[a] <= nat.hi[a] - nat.lo[a]) for a in range(3))
