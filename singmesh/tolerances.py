@@ -351,3 +351,32 @@ CURVE_TANGENT_MAX = 24.0
 #: Candidate boxes of the curve search (at its level) in a clump spanning
 #: fewer boxes than this hold isolated points, not a curve.
 CURVE_MIN_CLUMP = 4
+
+# ---------------------------------------------------------------- non-polynomial F
+# (singmesh.elementary: interval bounds and Taylor jets instead of Bernstein forms)
+
+#: Order of the Taylor jets of a non-polynomial F (its ``degree``): what
+#: classification reads at a singular point (A_k up to k = 7, as the first
+#: of CLASSIFY_ORDERS does for polynomials).
+TAYLOR_ORDER = 8
+
+#: Lattice-line roots of a non-polynomial F: pieces of a segment on which
+#: F' may vanish are halved down to this fraction of the segment (far
+#: below ROOT_CLUSTER, so two roots left in one piece are one cluster
+#: anyway); a root is then kept where |F| is at rounding level.
+ELEMENTARY_ROOT_PIECE = 1e-9
+
+#: A root polished by Newton is kept when |F| there is below this times
+#: the size of F's terms (a sign change across a pole, 1/x at 0, has
+#: |F| about its size and is no root).  A true root has |F| at rounding
+#: level (~1e-16 of it).
+ELEMENTARY_ROOT_RESIDUAL = 1e-8
+
+#: Safeguarded Newton (bisection when a step leaves the bracket) on
+#: sign-change brackets of lattice lines: at most this many steps.
+ELEMENTARY_ROOT_STEPS = 100
+
+#: may_vanish of a non-polynomial F tries every combination of the pieces
+#: of the kinks (Abs, Min, Max) straddling a box, up to this many; a box
+#: with more passes untested (never dropped).
+KINK_COMBINATIONS = 64

@@ -1,0 +1,671 @@
+"""A non-polynomial surface F(x, y, z) = 0: interval bounds and Taylor jets.
+
+:class:`ElementarySurface` implements the surface interface (issue #10)
+for F built from + - * /, powers (fractional too), sqrt, Abs, Min, Max,
+exp, log, sin, cos, tan, sinh, cosh, tanh.  F is compiled once into an
+expression graph (:mod:`singmesh.boxes.intervals`) with its three partial
+derivatives; boxes are bounded by vectorised interval arithmetic with
+outward rounding (the better of the natural extension and the centred
+form F(c) + [grad F](box) . (box - c), intersected), points by floating
+point evaluation of the graph, and Taylor expansions by truncated power
+series (:mod:`singmesh.jets`).
+
+Box data
+--------
+A stack of boxes is an (N, 4, 3) float array: rows 0 and 1 are the lower
+and upper corners as fractions t of the domain (dyadic, so halving is
+exact), rows 2 and 3 the domain's corners a and b.  A corner's coordinate
+is ``a + t * (b - a)``, the same double as the octree's
+``box[:, 0] + lattice * cell`` for the lattice point t * 2**fine.
+
+Domain rule
+-----------
+F is *undefined* where sqrt, log or a non-integer power gets a negative
+argument (also log of 0 and a negative power of 0), as in sympy and
+numpy, and there is no surface there: values at such points are NaN; on
+a box an argument is clipped to the function's domain, so the bounds are
+those of F on the part of the box where it is defined, and a box wholly
+outside the domain is empty (``excludes_zero`` is True).  Division by an
+interval holding 0 (a pole) gives infinite bounds: such boxes are never
+excluded nor simple, and a sign change of F across a pole is not a root
+(``line_roots`` keeps only roots where |F| is at rounding level relative
+to its terms).  The surface may therefore end where F's domain ends (the
+mesh then has a boundary there); :meth:`ElementarySurface.undefined_on`
+names a subexpression that is undefined somewhere on given boxes, for a
+caller that prefers an error.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Mapping
+
+import numpy as np
+import sympy
+
+from singmesh import tolerances as tol
+from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
+from singmesh.errors import SurfaceError
+from singmesh.jets import graph_jets, jet_space
+from singmesh.syntax import VARIABLES, read_equation
+
+_EPS = float(np.finfo(float).eps)
+_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+
+
+def _imul(al, ah, bl, bh):
+    """Interval product, rounded outwards (0 * inf counts as 0)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        p = np.stack([al * bl, al * bh, ah * bl, ah * bh])
+    return np.nextafter(np.nanmin(p, axis=0), -np.inf), np.nextafter(np.nanmax(p, axis=0), np.inf)
+
+
+def _one_sign(lo, hi):
+    """Strictly of one sign on the whole box (NaN: no)."""
+    return (lo > 0) | (hi < 0)
+
+
+class ElementarySurface:
+    """A surface F = 0 with F a non-polynomial elementary function of x, y, z.
+
+    Build it with :meth:`from_expr` (or :meth:`parse` for text).
+
+    Attributes
+    ----------
+    text : str
+    expr : sympy.Expr          F as read (not expanded)
+    params : dict[str, float]
+    rounding : float           relative precision of the input's numbers
+    is_polynomial : bool       False
+    degree : int               order of the Taylor jets used (``tol.TAYLOR_ORDER``)
+    scale : float              typical size of F's terms: the largest finite
+                               :meth:`magnitude` on the 5 x 5 x 5 grid of
+                               [-1, 1]^3 (1.0 if none is finite and nonzero)
+    """
+
+    is_polynomial = False
+
+    def __init__(self, text: str, expr: sympy.Expr, params: Mapping[str, float] | None = None,
+                 rounding: float = _EPS):
+        self.text = text
+        self.expr = expr
+        self.params = dict(params or {})
+        self.rounding = max(float(rounding), _EPS)
+        self.degree = tol.TAYLOR_ORDER
+        g = Graph()
+        self._graph = g
+        self._f = g.from_sympy(expr)
+        if g.ops[self._f] == "const":
+            raise SurfaceError(f"F = {expr} is constant: its zero set is empty or everything")
+        self._grad = [g.diff(self._f, a) for a in range(3)]
+        self._hess = [[g.diff(self._grad[a], b) for b in range(3)] for a in range(3)]
+        # Whether F can have poles (then a derivative of one sign does not
+        # make F monotone on a box unless F is bounded there).
+        self._kinks = [n for n in g.plan([self._f]) if g.ops[n] in ("abs", "max", "min")]
+        self._poles = any(
+            g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
+            for n in g.plan([self._f]))
+        s = np.linspace(-1.0, 1.0, 5)
+        grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
+        mag = self.magnitude(grid)
+        mag = mag[np.isfinite(mag) & (mag > 0)]
+        self.scale = float(mag.max()) if len(mag) else 1.0
+
+    # ------------------------------------------------------------ building
+    @classmethod
+    def from_expr(cls, expr: sympy.Expr, text: str, params: Mapping = None,
+                  rounding: float = 0.0) -> "ElementarySurface":
+        """Mirror of ``Surface._from_expr`` for a non-polynomial F.
+
+        Raises
+        ------
+        SurfaceError
+            Unknown symbols (the polynomial path's message), unsupported
+            functions, a non-real constant, or a constant F.
+        """
+        unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
+        if unknown:
+            raise SurfaceError(
+                "unknown symbol%s %s: only x, y, z are variables; give parameters as "
+                "keyword arguments or as definitions such as '; %s = 1;'"
+                % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
+            )
+        if not expr.free_symbols:
+            raise SurfaceError(f"F = {expr} is constant: its zero set is empty or everything")
+        values = {k: float(sympy.N(v)) for k, v in (params or {}).items()}
+        return cls(text, expr, values, rounding)
+
+    @classmethod
+    def parse(cls, text: str, **params) -> "ElementarySurface":
+        """Read text in the surface language (as ``Surface.parse``) into an ElementarySurface."""
+        eq = read_equation(text, params)
+        return cls.from_expr(eq.expr, text, eq.values, eq.rounding)
+
+    def __repr__(self) -> str:
+        return f"ElementarySurface({str(self.expr)!r})"
+
+    # ------------------------------------------------------------ points
+    def _points(self, points):
+        p = np.asarray(points, dtype=float)
+        return p.reshape(-1, 3), p.shape[:-1]
+
+    def __call__(self, points) -> np.ndarray:
+        """F at ``points`` (..., 3); NaN where F is undefined."""
+        p, shape = self._points(points)
+        return point_eval(self._graph, [self._f], p)[0].reshape(shape)
+
+    def gradient(self, points) -> np.ndarray:
+        """grad F at ``points`` (..., 3): (..., 3).  At a kink, the first active piece's."""
+        p, shape = self._points(points)
+        return np.stack(point_eval(self._graph, self._grad, p), -1).reshape(shape + (3,))
+
+    def value_gradient(self, points) -> tuple[np.ndarray, np.ndarray]:
+        p, shape = self._points(points)
+        f, *g = point_eval(self._graph, [self._f] + self._grad, p)
+        return f.reshape(shape), np.stack(g, -1).reshape(shape + (3,))
+
+    def hessian(self, points) -> np.ndarray:
+        """Hessian of F at ``points`` (..., 3): (..., 3, 3), from second-order jets."""
+        return self.jet(points)[2]
+
+    def jet(self, points):
+        """F, grad F and the Hessian at ``points`` in one pass (second-order Taylor jets).
+
+        Jets, not the derivative graph: they are defined where F is
+        analytic although an intermediate is not (cos(k sqrt(u)) at u = 0).
+        """
+        p, shape = self._points(points)
+        sp = jet_space(2)
+        t = graph_jets(self._graph, self._f, p, 2)
+        e = sp.index
+        g = t[:, [e[(1, 0, 0)], e[(0, 1, 0)], e[(0, 0, 1)]]]
+        h = np.empty((len(p), 3, 3))
+        for a in range(3):
+            for b in range(3):
+                k = [0, 0, 0]
+                k[a] += 1
+                k[b] += 1
+                h[:, a, b] = t[:, e[tuple(k)]] * (2.0 if a == b else 1.0)
+        return t[:, 0].reshape(shape), g.reshape(shape + (3,)), h.reshape(shape + (3, 3))
+
+    def magnitude(self, points) -> np.ndarray:
+        """Size of F's terms at ``points``: the scale of its rounding error."""
+        p, shape = self._points(points)
+        return point_eval(self._graph, [self._f], p, magnitude=True)[1][0].reshape(shape)
+
+    def gradient_magnitude(self, points) -> np.ndarray:
+        """The same for the three partial derivatives: (..., 3)."""
+        p, shape = self._points(points)
+        return np.stack(point_eval(self._graph, self._grad, p, magnitude=True)[1], -1).reshape(shape + (3,))
+
+    def is_zero(self, points) -> np.ndarray:
+        """Whether F is zero at ``points`` to within its rounding error (NaN: no)."""
+        p, shape = self._points(points)
+        (v,), (m,) = point_eval(self._graph, [self._f], p, magnitude=True)
+        return (np.abs(v) <= tol.ZERO_ULPS * _EPS * m).reshape(shape)
+
+    def taylor(self, point, order: int | None = None) -> np.ndarray:
+        """Coefficients T[i, j, k] of u^i v^j w^k in F(point + (u, v, w)), degree <= order.
+
+        ``order=None`` means ``degree``.  NaN where F has no expansion at
+        the point (outside its domain, sqrt of 0).
+        """
+        n = self.degree if order is None else int(order)
+        s = graph_jets(self._graph, self._f, np.asarray(point, float).reshape(1, 3), n)[0]
+        return jet_space(n).tensor(s)
+
+    # ------------------------------------------------------------ boxes
+    def enclose(self, box) -> np.ndarray:
+        """The whole domain ``box`` (3, 2) as a stack of one box: (1, 4, 3)."""
+        box = np.asarray(box, float)
+        data = np.zeros((1, 4, 3))
+        data[0, 1] = 1.0
+        data[0, 2] = box[:, 0]
+        data[0, 3] = box[:, 1]
+        return data
+
+    @staticmethod
+    def split(data: np.ndarray) -> np.ndarray:
+        """The eight children of each box: (N, 8, 4, 3), child c at ``offsets[c]``."""
+        lo, hi = data[:, 0], data[:, 1]
+        mid = (lo + hi) * 0.5  # exact: dyadic fractions
+        out = np.empty((len(data), 8, 4, 3))
+        o = _OFFSETS[None].astype(bool)
+        out[:, :, 0] = np.where(o, mid[:, None], lo[:, None])
+        out[:, :, 1] = np.where(o, hi[:, None], mid[:, None])
+        out[:, :, 2] = data[:, None, 2]
+        out[:, :, 3] = data[:, None, 3]
+        return out
+
+    @staticmethod
+    def corners(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners (N, 3) in space of the boxes in ``data``."""
+        a, b = data[:, 2], data[:, 3]
+        w = b - a
+        return a + data[:, 0] * w, a + data[:, 1] * w
+
+    def _value_bounds(self, lo, hi, grad=None, centre=True):
+        """Bounds of F: natural extension, intersected with the centred form.
+
+        ``grad``: bounds of grad F on the boxes (list of 3 (lo, hi)), if known.
+        """
+        g = self._graph
+        res = interval_eval(g, [self._f], lo, hi)
+        flo, fhi = res.lo[0], res.hi[0]
+        if not centre:
+            return flo, fhi
+        # Centred form only where it can help: F's bounds straddle 0, the
+        # box lies in F's domain (a clipped box need not be connected).
+        sel = np.nonzero((flo <= 0) & (fhi >= 0) & ~res.clipped)[0]
+        if len(sel) == 0:
+            return flo, fhi
+        l, h = lo[sel], hi[sel]
+        if grad is None:
+            r = interval_eval(g, self._grad, l, h)
+            gl, gh = r.lo, r.hi
+        else:
+            gl = [x[0][sel] for x in grad]
+            gh = [x[1][sel] for x in grad]
+        c = (l + h) * 0.5
+        fc = interval_eval(g, [self._f], c, c)
+        cl, ch = fc.lo[0], fc.hi[0]
+        for a in range(3):
+            dl = np.nextafter(l[:, a] - c[:, a], -np.inf)
+            dh = np.nextafter(h[:, a] - c[:, a], np.inf)
+            pl, ph = _imul(gl[a], gh[a], np.minimum(dl, 0.0), np.maximum(dh, 0.0))
+            cl = np.nextafter(cl + pl, -np.inf)
+            ch = np.nextafter(ch + ph, np.inf)
+        ok = np.isfinite(cl) & np.isfinite(ch)
+        flo = flo.copy()
+        fhi = fhi.copy()
+        flo[sel] = np.where(ok, np.maximum(flo[sel], cl), flo[sel])
+        fhi[sel] = np.where(ok, np.minimum(fhi[sel], ch), fhi[sel])
+        return flo, fhi
+
+    def _gradient_bounds(self, lo, hi, comps):
+        """Bounds of the partial derivatives ``comps`` on boxes: an IntervalResult.
+
+        The natural extension, intersected where it straddles 0 with the
+        centred form F_a(c) + [grad F_a](box) . (box - c) when F has no
+        Abs/Min/Max (their derivatives jump: the Hessian graph does not
+        see the jump) and the box lies in F's domain.  Sigmoid blends'
+        derivatives lose a factor of several to dependency otherwise.
+        """
+        g = self._graph
+        r = interval_eval(g, [self._grad[a] for a in comps], lo, hi)
+        if self._kinks:
+            return r
+        for k, a in enumerate(comps):
+            gl, gh = r.lo[k], r.hi[k]
+            sel = np.nonzero((gl <= 0) & (gh >= 0) & ~r.clipped)[0]
+            if len(sel) == 0:
+                continue
+            l, h = lo[sel], hi[sel]
+            c = (l + h) * 0.5
+            moving = [b for b in range(3) if np.any(h[:, b] > l[:, b])]
+            hb = interval_eval(g, [self._hess[a][b] for b in moving], l, h)
+            gc = interval_eval(g, [self._grad[a]], c, c)
+            cl, ch = gc.lo[0], gc.hi[0]
+            for j, b in enumerate(moving):
+                dl = np.nextafter(l[:, b] - c[:, b], -np.inf)
+                dh = np.nextafter(h[:, b] - c[:, b], np.inf)
+                pl, ph = _imul(hb.lo[j], hb.hi[j], np.minimum(dl, 0.0), np.maximum(dh, 0.0))
+                cl = np.nextafter(cl + pl, -np.inf)
+                ch = np.nextafter(ch + ph, np.inf)
+            ok = np.isfinite(cl) & np.isfinite(ch) & ~hb.clipped
+            r.lo[k] = gl.copy()
+            r.hi[k] = gh.copy()
+            r.lo[k][sel] = np.where(ok, np.maximum(gl[sel], cl), gl[sel])
+            r.hi[k][sel] = np.where(ok, np.minimum(gh[sel], ch), gh[sel])
+        return r
+
+    def _slack(self, flo, fhi, lo, hi):
+        """Room for rounding when reading F's bounds: PRUNE_SLACK of their size,
+        and at least F's rounding error at the box centre where that matters."""
+        slack = tol.PRUNE_SLACK * np.maximum(np.abs(flo), np.abs(fhi))
+        near = np.nonzero(np.minimum(np.abs(flo), np.abs(fhi)) <= 1e6 * tol.ZERO_ULPS * _EPS * np.maximum(np.abs(flo), np.abs(fhi)))[0]
+        if len(near):
+            c = (lo[near] + hi[near]) * 0.5
+            _, (m,) = point_eval(self._graph, [self._f], c, magnitude=True)
+            slack[near] = np.fmax(slack[near], tol.ZERO_ULPS * _EPS * m)
+        return slack
+
+    def excludes_zero(self, data: np.ndarray) -> np.ndarray:
+        """F certainly has no zero on the closed box (with room for rounding): (N,) bool.
+
+        True also on boxes wholly outside F's domain (no surface there).
+        """
+        lo, hi = self.corners(data)
+        flo, fhi = self._value_bounds(lo, hi)
+        slack = self._slack(flo, fhi, lo, hi)
+        return (flo > slack) | (fhi < -slack) | np.isnan(flo) | np.isnan(fhi)
+
+    def _continuous(self, lo, hi):
+        """Where F is bounded on the boxes (no pole): (N,) bool."""
+        if not self._poles:
+            return np.ones(len(lo), bool)
+        r = interval_eval(self._graph, [self._f], lo, hi)
+        return np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
+
+    def _face(self, lo, hi, n, side):
+        """The faces normal to ``n`` of boxes (side 0: low, 1: high), as degenerate boxes."""
+        lo, hi = lo.copy(), hi.copy()
+        side = np.broadcast_to(np.asarray(side), (len(lo),))
+        plane = np.where(side == 1, hi[:, n], lo[:, n])
+        lo[:, n] = plane
+        hi[:, n] = plane
+        return lo, hi
+
+    def _face_without_loops(self, lo, hi, n):
+        """Whether the curve F + eps = 0 on faces (normal n) has no closed loop."""
+        u, v = (n + 1) % 3, (n + 2) % 3
+        r = self._gradient_bounds(lo, hi, (u, v))
+        # A face partly outside F's domain may hold an end of the surface.
+        ok = (_one_sign(r.lo[0], r.hi[0]) | _one_sign(r.lo[1], r.hi[1])) & self._continuous(lo, hi) & ~r.clipped
+        rest = np.nonzero(~ok)[0]
+        if len(rest):
+            # F of one sign on the face: centred form with the face's
+            # tangential derivatives (the face is flat along n).
+            zero = np.zeros(len(rest))
+            grad = [(zero, zero)] * 3
+            grad[u] = (r.lo[0][rest], r.hi[0][rest])
+            grad[v] = (r.lo[1][rest], r.hi[1][rest])
+            flo, fhi = self._value_bounds(lo[rest], hi[rest], grad=grad)
+            ok[rest] = ((flo >= 0) | (fhi < 0)) & ~r.clipped[rest]
+        return ok
+
+    def simple_axis(self, data: np.ndarray) -> np.ndarray:
+        """First axis a such that F_a is of one sign on the box and the curve
+        F = 0 on both faces normal to a has no closed loop, else -1: (N,) int64."""
+        lo, hi = self.corners(data)
+        result = np.full(len(data), -1, np.int64)
+        r = self._gradient_bounds(lo, hi, (0, 1, 2))
+        # Not simple: boxes with a pole, and boxes partly outside F's domain
+        # (the surface may end inside them).
+        todo = np.nonzero(self._continuous(lo, hi) & ~r.clipped)[0]
+        for a in range(3):
+            ok = _one_sign(r.lo[a][todo], r.hi[a][todo])
+            cand = todo[ok]
+            if len(cand):
+                flo, fhi = self._face(lo[cand], hi[cand], a, 0)
+                glo, ghi = self._face(lo[cand], hi[cand], a, 1)
+                both = self._face_without_loops(np.concatenate([flo, glo]), np.concatenate([fhi, ghi]), a)
+                good = both[:len(cand)] & both[len(cand):]
+                result[cand[good]] = a
+                done = np.zeros(len(data), bool)
+                done[cand[good]] = True
+                todo = todo[~done[todo]]
+            if len(todo) == 0:
+                break
+        return result
+
+    def face_modes(self, data: np.ndarray, n: int, side) -> np.ndarray:
+        """0: F_v of one sign on the face (graph over u); 1: F_u of one sign; 2: neither."""
+        lo, hi = self.corners(data)
+        lo, hi = self._face(lo, hi, n, side)
+        u, v = (n + 1) % 3, (n + 2) % 3
+        r = self._gradient_bounds(lo, hi, (u, v))
+        cont = self._continuous(lo, hi) & ~r.clipped
+        over_u = _one_sign(r.lo[1], r.hi[1]) & cont
+        over_v = _one_sign(r.lo[0], r.hi[0]) & cont
+        return np.where(over_u, 0, np.where(over_v, 1, 2)).astype(np.int64)
+
+    def may_vanish(self, data: np.ndarray, axes=(0, 1, 2)) -> np.ndarray:
+        """F and its partial derivatives along ``axes`` may all vanish on the box: (N,) bool.
+
+        At kinks (Abs, Min, Max) a box passes when some one piece active on
+        it may have F and those derivatives all zero: every combination of
+        the pieces of the kinks that straddle the box is tried (a crease
+        where no piece is singular, the cube's edges, is not a candidate).
+        Beyond ``KINK_COMBINATIONS`` combinations the box passes.  The
+        continuous kinks of R-functions (sqrt(f^2 + g^2) where f = g = 0)
+        keep the hull of the derivatives: their creases pass.
+        """
+        lo, hi = self.corners(data)
+        keep = self._may_vanish(lo, hi, axes, None)
+        idx = np.nonzero(keep)[0]
+        if len(idx) == 0 or not self._kinks:
+            return keep
+        pieces = kink_pieces(self._graph, self._kinks, lo[idx], hi[idx])
+        flags = np.concatenate(pieces, axis=1)
+        straddle = np.stack([p.sum(axis=1) > 1 for p in pieces], 1)
+        some = straddle.any(axis=1)
+        if not some.any():
+            return keep
+        idx, flags = idx[some], flags[some]
+        patterns, inverse = np.unique(flags, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        widths = [p.shape[1] for p in pieces]
+        starts = np.concatenate([[0], np.cumsum(widths)])
+        for g_i, pattern in enumerate(patterns):
+            members = idx[inverse == g_i]
+            choices = []
+            for k, node in enumerate(self._kinks):
+                act = np.nonzero(pattern[starts[k]:starts[k + 1]])[0]
+                if len(act) > 1:
+                    choices.append((kink_key(self._graph, node), act))
+            n_combos = int(np.prod([len(c[1]) for c in choices]))
+            if n_combos > tol.KINK_COMBINATIONS:
+                continue  # kept: too many pieces to try
+            found = np.zeros(len(members), bool)
+            for combo in itertools.product(*[c[1] for c in choices]):
+                force = {c[0]: np.full(len(members), j) for c, j in zip(choices, combo)}
+                found |= self._may_vanish(lo[members], hi[members], axes, force, value=False)
+                if found.all():
+                    break
+            keep[members] = found
+        return keep
+
+    def _may_vanish(self, lo, hi, axes, force, value=True):
+        """The hull test of may_vanish (with pieces forced at kinks: derivatives only)."""
+        keep = np.ones(len(lo), bool)
+        if len(axes):
+            if force is None:
+                r = self._gradient_bounds(lo, hi, tuple(axes))
+            else:
+                r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi, force=force)
+            for k in range(len(axes)):
+                gl, gh = r.lo[k], r.hi[k]
+                s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+                keep &= (gl <= s) & (gh >= -s)
+        idx = np.nonzero(keep)[0]
+        if value and len(idx):
+            flo, fhi = self._value_bounds(lo[idx], hi[idx])
+            slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(np.abs(flo), np.abs(fhi)),
+                               self._slack(flo, fhi, lo[idx], hi[idx]))
+            keep[idx] = (flo <= slack) & (fhi >= -slack)
+        return keep
+
+    def undefined_on(self, data: np.ndarray):
+        """A subexpression of F undefined somewhere on one of the boxes, or None.
+
+        Returns ``(text, point)``: the subexpression (sqrt, log or power of
+        a possibly negative argument, division by a possibly zero one) and
+        a point of the box where it is undefined or infinite (its centre if
+        no sample shows it), for a caller that refuses such input with a
+        SurfaceError.
+        """
+        lo, hi = self.corners(data)
+        for node in sympy.preorder_traversal(self.expr):
+            if not node.free_symbols:
+                continue
+            arg = None
+            if isinstance(node, (sympy.log,)):
+                arg, strict = node.args[0], True
+            elif isinstance(node, sympy.Pow) and not node.exp.free_symbols:
+                e = node.exp
+                if not e.is_Integer:
+                    arg, strict = node.base, bool(e.is_negative)
+                elif e.is_negative:
+                    arg, strict = node.base, None
+            if arg is None:
+                continue
+            g = Graph()
+            n = g.from_sympy(arg)
+            r = interval_eval(g, [n], lo, hi)
+            bad = (r.lo[0] < 0) if strict is False else (r.lo[0] <= 0) if strict else ((r.lo[0] <= 0) & (r.hi[0] >= 0))
+            if bad.any():
+                i = int(np.nonzero(bad)[0][0])
+                t = np.linspace(0, 1, 9)
+                pts = lo[i] + (hi[i] - lo[i]) * np.stack(np.meshgrid(t, t, t, indexing="ij"), -1).reshape(-1, 3)
+                val = point_eval(g, [n], pts)[0]
+                j = int(np.argmin(val if strict is not None else np.abs(val)))
+                return str(node), pts[j]
+        return None
+
+    # ------------------------------------------------------------ lattice lines
+    def line_roots(self, axis: int, fixed, s0, s1) -> tuple[np.ndarray, np.ndarray]:
+        """Zeros of F on the segments {coordinate ``axis`` = s in [s0, s1], the
+        others (cyclic order) = ``fixed``}: every sign change at least once,
+        double roots to rounding, polished to full precision.
+
+        Returns
+        -------
+        row : (R,) int64, s : (R,) float64
+        """
+        fixed = np.asarray(fixed, float).reshape(-1, 2)
+        s0 = np.asarray(s0, float).reshape(-1)
+        s1 = np.asarray(s1, float).reshape(-1)
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        g, f, d = self._graph, self._f, self._grad[axis]
+        min_width = tol.ELEMENTARY_ROOT_PIECE * np.abs(s1 - s0)
+
+        def boxes(row, a, b):
+            lo = np.empty((len(row), 3))
+            lo[:, axis] = a
+            lo[:, u] = fixed[row, 0]
+            lo[:, v] = fixed[row, 1]
+            hi = lo.copy()
+            hi[:, axis] = b
+            return lo, hi
+
+        def values(row, s):
+            lo, _ = boxes(row, s, s)
+            return point_eval(g, [f], lo, magnitude=True)
+
+        row = np.arange(len(s0))
+        a, b = s0.copy(), s1.copy()
+        br_row, br_a, br_b = [], [], []
+        out_row, out_s = [], []
+        for _ in range(200):
+            if len(row) == 0:
+                break
+            lo, hi = boxes(row, a, b)
+            r = self._gradient_bounds(lo, hi, (axis,))
+            dl, dh = r.lo[0], r.hi[0]
+            clipped = r.clipped
+            grad = [(np.zeros(len(row)), np.zeros(len(row))) for _ in range(3)]
+            grad[axis] = (dl, dh)
+            flo, fhi = self._value_bounds(lo, hi, grad=grad)
+            slack = self._slack(flo, fhi, lo, hi)
+            maybe = (flo <= slack) & (fhi >= -slack)
+            row, a, b, dl, dh, clipped = row[maybe], a[maybe], b[maybe], dl[maybe], dh[maybe], clipped[maybe]
+            flo, fhi = flo[maybe], fhi[maybe]
+            if len(row) == 0:
+                break
+            # Monotone: F' of one sign and F bounded (no pole between) and
+            # defined on the whole piece (its end values are then read).
+            mono = _one_sign(dl, dh) & np.isfinite(flo) & np.isfinite(fhi) & ~clipped
+            small = ~mono & ((b - a) <= min_width[row])
+            ends = np.nonzero(mono | small)[0]
+            if len(ends):
+                er, ea, eb = row[ends], a[ends], b[ends]
+                mid = 0.5 * (ea + eb)
+                (fv,), (fm,) = values(np.concatenate([er, er, er]), np.concatenate([ea, eb, mid]))
+                k = len(ends)
+                fa, fb, fmid = fv[:k], fv[k:2 * k], fv[2 * k:]
+                zero = np.abs(fv) <= tol.ZERO_ULPS * _EPS * fm
+                change = (fa < 0) != (fb < 0)
+                change &= ~np.isnan(fa) & ~np.isnan(fb)
+                br_row.append(er[change])
+                br_a.append(ea[change])
+                br_b.append(eb[change])
+                # No sign change: a root only where |F| is at rounding level
+                # (an end point, or a double root in a smallest piece).
+                rest = ~change
+                sm = small[ends]
+                cand = np.stack([ea, eb, mid])
+                zz = zero.reshape(3, k)
+                absv = np.abs(fv).reshape(3, k)
+                absv = np.where(zz, absv, np.inf)
+                if not sm.all():
+                    absv[2, ~sm] = np.inf  # monotone pieces: only their ends
+                best = np.argmin(absv, axis=0)
+                hit = rest & np.isfinite(absv[best, np.arange(k)])
+                out_row.append(er[hit])
+                out_s.append(cand[best[hit], np.nonzero(hit)[0]])
+            # Pieces on which F is zero to rounding throughout: one root at
+            # the middle, not split further (near a double root, F is below
+            # rounding on a piece of width ~ sqrt(eps); a line lying in the
+            # surface gets a root per such piece, which costs nothing).
+            split = np.nonzero(~mono & ~small)[0]
+            if len(split) == 0:
+                row = row[:0]
+                break
+            row, a, b = row[split], a[split], b[split]
+            c = (a + b) * 0.5
+            _, (cm,) = values(row, c)
+            flat = np.maximum(np.abs(flo[split]), np.abs(fhi[split])) <= tol.ZERO_ULPS * _EPS * cm
+            out_row.append(row[flat])
+            out_s.append(c[flat])
+            row, a, b, c = row[~flat], a[~flat], b[~flat], c[~flat]
+            row = np.concatenate([row, row])
+            a, b = np.concatenate([a, c]), np.concatenate([c, b])
+        brow = np.concatenate(br_row) if br_row else np.zeros(0, np.int64)
+        if len(brow):
+            ba, bb = np.concatenate(br_a), np.concatenate(br_b)
+            s, good = self._polish(axis, fixed, brow, ba, bb)
+            out_row.append(brow[good])
+            out_s.append(s[good])
+        if not out_row:
+            return np.zeros(0, np.int64), np.zeros(0)
+        rows = np.concatenate(out_row).astype(np.int64)
+        s = np.concatenate(out_s)
+        order = np.lexsort((s, rows))
+        return rows[order], s[order]
+
+    def _polish(self, axis, fixed, row, a, b):
+        """Roots in sign-change brackets [a, b]: Newton kept inside the bracket
+        (bisection where it leaves it), to full precision; kept where |F| is
+        at rounding level (a sign change across a pole is no root)."""
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        g, f, d = self._graph, self._f, self._grad[axis]
+
+        def pts(r, s):
+            p = np.empty((len(r), 3))
+            p[:, axis] = s
+            p[:, u] = fixed[r, 0]
+            p[:, v] = fixed[r, 1]
+            return p
+
+        a, b = a.copy(), b.copy()
+        fa_neg = point_eval(g, [f], pts(row, a))[0] < 0
+        x = 0.5 * (a + b)
+        active = np.arange(len(row))
+        for _ in range(tol.ELEMENTARY_ROOT_STEPS):
+            if len(active) == 0:
+                break
+            xa = x[active]
+            fx, dx = point_eval(g, [f, d], pts(row[active], xa))
+            left = (fx < 0) == fa_neg[active]  # the root is right of x
+            aa = np.where(left, xa, a[active])
+            bb = np.where(left, b[active], xa)
+            a[active], b[active] = aa, bb
+            with np.errstate(all="ignore"):
+                xn = xa - fx / dx
+            inside = np.isfinite(xn) & (xn > aa) & (xn < bb)
+            xn = np.where(inside, xn, 0.5 * (aa + bb))
+            step = np.abs(xn - xa)
+            tiny = 2 * np.spacing(np.maximum(np.abs(aa), np.abs(bb)))
+            done = (fx == 0) | (step <= tiny) | ((bb - aa) <= tiny)
+            x[active] = np.where(fx == 0, xa, xn)
+            active = active[~done]
+        (fv,), (fm,) = point_eval(g, [f], pts(row, x), magnitude=True)
+        good = np.abs(fv) <= tol.ELEMENTARY_ROOT_RESIDUAL * fm
+        if self._poles:
+            # A sign change across a pole: F is unbounded next to x.
+            delta = 4 * np.spacing(np.maximum(np.abs(a), np.abs(b))) + 1e-300
+            lo, hi = pts(row, x - delta), pts(row, x + delta)
+            r = interval_eval(g, [f], lo, hi)
+            good &= np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
+        return x, good
