@@ -47,6 +47,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
+from singmesh.surface import Surface
 from singmesh.syntax import VARIABLES, read_equation
 
 _EPS = float(np.finfo(float).eps)
@@ -65,7 +66,7 @@ def _one_sign(lo, hi):
     return (lo > 0) | (hi < 0)
 
 
-class ElementarySurface:
+class ElementarySurface(Surface):
     """A surface F = 0 with F a non-polynomial elementary function of x, y, z.
 
     Build it with :meth:`from_expr` (or :meth:`parse` for text).

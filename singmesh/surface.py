@@ -96,12 +96,14 @@ class Surface(abc.ABC):
         Returns
         -------
         Surface
-            A :class:`PolynomialSurface`.
+            A :class:`PolynomialSurface` for a polynomial (exact Bernstein
+            bounds), else a :class:`singmesh.elementary.ElementarySurface`
+            (interval bounds and Taylor jets of the expression).
 
         Raises
         ------
         SurfaceError
-            If the input is not a usable polynomial in x, y, z.
+            If the input is not a usable function of x, y, z.
         """
         if isinstance(source, Surface):
             if not params:
@@ -119,7 +121,13 @@ class Surface(abc.ABC):
             raise SurfaceError(
                 f"a surface is given as text or a sympy expression, not {type(source).__name__}"
             )
-        return PolynomialSurface._from_expr(expr, text, values, rounding)
+        if _is_polynomial(expr):
+            return PolynomialSurface._from_expr(expr, text, values, rounding)
+        # sqrt, abs, Min/Max, exp, trig ...: interval bounds and Taylor jets
+        # of the expression tree instead of Bernstein tensors.
+        from .elementary import ElementarySurface
+
+        return ElementarySurface.from_expr(expr, text, values, rounding)
 
     # ------------------------------------------------------------ at points
     @abc.abstractmethod
@@ -470,6 +478,15 @@ class PolynomialSurface(Surface):
 
 
 # ---------------------------------------------------------------- checks
+def _is_polynomial(expr: sympy.Expr) -> bool:
+    """Whether ``expr`` is a polynomial in x, y, z (other symbols are left to the builder's message)."""
+    try:
+        _check_polynomial(expr)
+    except SurfaceError:
+        return False
+    return True
+
+
 def _check_polynomial(expr: sympy.Expr) -> None:
     """Raise SurfaceError naming the first subexpression that is not polynomial."""
     for node in sympy.preorder_traversal(expr):

@@ -116,7 +116,14 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
         f, g, h = surface.jet(y)
         r = np.concatenate([f[:, None], g], axis=1)  # (K, 4)
         j = np.concatenate([g[:, None, :], h], axis=1)  # (K, 4, 3)
-        step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
+        # A start that left F's domain or overflowed (exp of a large
+        # argument) has no step: it becomes NaN and stops.
+        finite = np.isfinite(j).all(axis=(1, 2)) & np.isfinite(r).all(axis=1)
+        if finite.all():
+            step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
+        else:
+            step = np.full(r.shape[:1] + (3,), np.nan)
+            step[finite] = np.einsum("kij,kj->ki", np.linalg.pinv(j[finite], rcond=1e-12), r[finite])
         if across is not None:
             a = across[live]
             step = step - np.einsum("ki,ki->k", step, a)[:, None] * a
@@ -128,7 +135,7 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
         # coordinate going to 0 (a point on a symmetry plane) goes on until
         # it is 0; NaN steps stay live and stay NaN, as before.
         moving = ~np.all(np.abs(step) <= tol.NEWTON_STILL * np.abs(y), axis=1)
-        live = live[moving]
+        live = live[moving & finite]
     return x
 
 

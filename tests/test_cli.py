@@ -17,10 +17,10 @@ def test_mesh_writes_and_reports(tmp_path):
 
 
 def test_bad_equation_one_line_exit_2():
-    r = run("mesh", "sin(x) + y")
+    r = run("mesh", "gamma(x) + y")
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "not a polynomial" in lines[0]
+    assert len(lines) == 1 and "unknown function gamma" in lines[0]
 
 
 def test_bad_box():

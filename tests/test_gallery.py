@@ -48,9 +48,9 @@ BROKEN = f'''
 [[entry]]
 name = "{BROKEN_NAME}"
 group = "smooth"
-equation = "x^2 + sin(y) - 1"
+equation = "x^2 + gamma(y) - 1"
 box = [[-1.0, 1.0], [-1.0, 1.0], [-1.0, 1.0]]
-description = "Not a polynomial: meshing must fail, and the page must say so."
+description = "An unknown function: meshing must fail, and the page must say so."
 expected = []
 status = "supported"
 '''

@@ -62,8 +62,7 @@ def test_derivatives():
 
 
 @pytest.mark.parametrize("text, words", [
-    ("sin(x) + y", "not a polynomial"),
-    ("x / y", "not a polynomial"),
+    ("gamma(x) + y", "unknown function gamma"),
     ("x + w", "unknown symbol w"),
     ("x + beta", "unknown symbol beta"),
     ("x + (y", "syntax error"),
@@ -82,6 +81,20 @@ def test_derivatives():
 def test_errors_name_the_problem(text, words):
     with pytest.raises(SurfaceError, match=words):
         Surface.parse(text)
+
+
+@pytest.mark.parametrize("text, f", [
+    ("sin(x) + y", lambda x, y, z: np.sin(x) + y),
+    ("x / (1 + y^2)", lambda x, y, z: x / (1 + y * y)),
+    ("sqrt(x^2 + y^2) - z", lambda x, y, z: np.sqrt(x * x + y * y) - z),
+])
+def test_non_polynomials_are_read_as_functions(text, f):
+    # Not refused any more (issue #10): an interval-bounded surface whose
+    # values are the function's.
+    s = Surface.parse(text)
+    assert not s.is_polynomial
+    p = np.random.default_rng(1).uniform(-1, 1, (20, 3))
+    assert np.allclose(s(p), f(*p.T), rtol=1e-14, atol=1e-14)
 
 
 def test_not_text():

@@ -1,0 +1,158 @@
+"""Non-polynomial surfaces (issue #10), checked independently of the mesher.
+
+F is written again here as numpy code (not taken from singmesh); the
+gradient for the residuals is a central difference.  Each mesh is checked
+for: vertices on the surface (|F| / |grad F| against the box), no open edge
+inside the box, no non-manifold edge, Euler characteristic and components
+where the surface is closed, every triangle near a dense marching-cubes
+sample of F = 0, and every marching-cubes point near the mesh (nothing of
+the surface left out).
+"""
+
+import importlib.util
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import singmesh
+
+import meshcheck as mc
+
+SPH = "(x^2+y^2+z^2-1)"
+H = "1/(1+exp(-20*({})))"      # seed 001's sigmoid H_k, k = 20
+F1 = "(0.36-((x-0.5)^2+y^2+z^2))"
+G1 = "(0.36-((x+0.5)^2+y^2+z^2))"
+
+
+def _sph(x, y, z):
+    return x * x + y * y + z * z - 1
+
+
+def _h(s):
+    return 1 / (1 + np.exp(-20 * s))
+
+
+def _f1(x, y, z):
+    return 0.36 - ((x - 0.5) ** 2 + y * y + z * z)
+
+
+def _g1(x, y, z):
+    return 0.36 - ((x + 0.5) ** 2 + y * y + z * z)
+
+
+B15 = ((-1.5, 1.5),) * 3
+B1 = ((-1.0, 1.0),) * 3
+PERIOD = ((-3.0, 3.3),) * 3
+
+#: name, equation (as a user types it), numpy F, box, Euler characteristic, components.
+#: The gyroid's and Schwarz P's counts, cut by the box, are scikit-image's
+#: marching cubes on a 160^3 grid (the others are closed surfaces).
+CASES = [
+    ("half-ball-max", f"Max({SPH}, z)", lambda x, y, z: np.maximum(_sph(x, y, z), z), B15, 2, 1),
+    ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}^2 + z^2)",
+     lambda x, y, z: _sph(x, y, z) + z + np.sqrt(_sph(x, y, z) ** 2 + z * z), B15, 2, 1),
+    ("half-ball-min-lower", f"min({SPH}, -z) ", lambda x, y, z: np.minimum(_sph(x, y, z), -z), B15, None, None),
+    ("cube-max", "max(abs(x), abs(y), abs(z)) - 0.7",
+     lambda x, y, z: np.maximum(np.maximum(np.abs(x), np.abs(y)), np.abs(z)) - 0.7, B1, 2, 1),
+    ("sigmoid-union", f"{H.format(F1)} + {H.format(G1)} - {H.format(F1)}*{H.format(G1)} - 1/2",
+     lambda x, y, z: _h(_f1(x, y, z)) + _h(_g1(x, y, z)) - _h(_f1(x, y, z)) * _h(_g1(x, y, z)) - 0.5,
+     B15, 2, 1),
+    ("sigmoid-intersection", f"{H.format(F1)}*{H.format(G1)} - 1/2",
+     lambda x, y, z: _h(_f1(x, y, z)) * _h(_g1(x, y, z)) - 0.5, B15, 2, 1),
+    ("sigmoid-difference", f"{H.format(F1)}*(1 - {H.format(G1)}) - 1/2",
+     lambda x, y, z: _h(_f1(x, y, z)) * (1 - _h(_g1(x, y, z))) - 0.5, B15, 2, 1),
+    ("torus-sqrt", "(sqrt(x^2+y^2)-0.8)^2 + z^2 - 0.09",
+     lambda x, y, z: (np.sqrt(x * x + y * y) - 0.8) ** 2 + z * z - 0.09, B15, 0, 1),
+    ("gyroid", "sin(x) cos(y) + sin(y) cos(z) + sin(z) cos(x)",
+     lambda x, y, z: np.sin(x) * np.cos(y) + np.sin(y) * np.cos(z) + np.sin(z) * np.cos(x), PERIOD, -2, 2),
+    ("schwarz-p", "cos(x) + cos(y) + cos(z)", lambda x, y, z: np.cos(x) + np.cos(y) + np.cos(z),
+     PERIOD, -4, 1),
+    ("superquadric", "abs(x)^2.5 + abs(y)^2.5 + abs(z)^3 - 1",
+     lambda x, y, z: np.abs(x) ** 2.5 + np.abs(y) ** 2.5 + np.abs(z) ** 3 - 1, B15, 2, 1),
+    ("metaballs", "exp(-4((x-0.4)^2+y^2+z^2)) + exp(-4((x+0.4)^2+y^2+z^2)) + exp(-4(x^2+(y-0.5)^2+z^2)) - 0.7",
+     lambda x, y, z: (np.exp(-4 * ((x - 0.4) ** 2 + y * y + z * z)) + np.exp(-4 * ((x + 0.4) ** 2 + y * y + z * z))
+                      + np.exp(-4 * (x * x + (y - 0.5) ** 2 + z * z)) - 0.7), B15, 2, 1),
+]
+
+
+def _grad(f, p, h=1e-7):
+    e = np.eye(3) * h
+    return np.stack([(f(*(p + e[i]).T) - f(*(p - e[i]).T)) / (2 * h) for i in range(3)], axis=-1)
+
+
+@pytest.fixture(scope="module", params=CASES, ids=[c[0] for c in CASES])
+def case(request):
+    name, text, f, box, chi, comps = request.param
+    return singmesh.mesh(text, box), f, np.array(box, float), chi, comps
+
+
+def test_vertices_on_surface(case):
+    m, f, box, chi, comps = case
+    assert len(m.faces) > 100
+    v = m.vertices
+    assert np.isfinite(v).all()
+    g = np.linalg.norm(_grad(f, v), axis=1)
+    scale = float(np.median(g))
+    # Relative to the typical gradient: on a crease the one-sided
+    # gradients differ and the difference quotient straddles them.
+    assert (np.abs(f(*v.T)) / scale).max() <= 1e-10 * np.ptp(box, axis=1).max()
+
+
+def test_no_open_or_non_manifold_edges(case):
+    m, f, box, chi, comps = case
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, box) == []
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+    assert len(np.unique(m.faces)) == len(m.vertices)
+
+
+def test_topology(case):
+    m, f, box, chi, comps = case
+    if chi is not None:
+        assert mc.euler(m.vertices, m.faces) == chi
+    if comps is not None:
+        assert mc.components(m.faces) == comps
+
+
+def test_close_to_marching_cubes_both_ways(case):
+    m, f, box, chi, comps = case
+    if importlib.util.find_spec("skimage") is None:
+        pytest.skip("scikit-image is not installed (pip install -e '.[bench]'): the marching-cubes oracle is skipped")
+    from skimage.measure import marching_cubes
+
+    n = 128
+    h = (box[:, 1] - box[:, 0]) / n
+    axes = [np.linspace(b[0] + 0.37 * s, b[1] - 0.63 * s, n) for b, s in zip(box, h)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    values = f(*grid.T).reshape(n, n, n)
+    pts = marching_cubes(values, 0.0, spacing=tuple(h))[0] + np.array([a[0] for a in axes])
+    V, T = m.vertices, m.faces
+    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+    longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                      np.linalg.norm(a - c, axis=1)], axis=0)
+    d = cKDTree(pts).query((a + b + c) / 3)[0]
+    assert (d > 0.5 * longest + 2.0 * h.max()).mean() <= 0.002
+    # Every marching-cubes point is near a triangle of the mesh (a vertex
+    # within a triangle's size): no part of the surface is left out.
+    step = float(np.median(longest))
+    d = cKDTree(V).query(pts)[0]
+    assert (d > 2 * step + 2 * h.max()).sum() == 0
+
+
+def test_same_bytes_twice():
+    text = "sin(x) cos(y) + sin(y) cos(z) + sin(z) cos(x)"
+    a = singmesh.mesh(text, ((-1.0, 1.3),) * 3, coarse=16)
+    b = singmesh.mesh(text, ((-1.0, 1.3),) * 3, coarse=16)
+    assert a.vertices.tobytes() == b.vertices.tobytes() and a.faces.tobytes() == b.faces.tobytes()
+
+
+def test_polynomial_written_with_sqrt_matches_the_polynomial():
+    # The torus as a polynomial and with sqrt: the same surface, so the
+    # same topology, and each mesh's vertices lie on the other's equation.
+    poly = singmesh.mesh("(x^2+y^2+z^2+0.64-0.09)^2 - 2.56(x^2+y^2)", B15)
+    root = singmesh.mesh("(sqrt(x^2+y^2)-0.8)^2 + z^2 - 0.09", B15)
+    for m in (poly, root):
+        assert mc.euler(m.vertices, m.faces) == 0 and mc.components(m.faces) == 1
+    x, y, z = poly.vertices.T
+    assert np.abs((np.sqrt(x * x + y * y) - 0.8) ** 2 + z * z - 0.09).max() < 1e-9
