@@ -102,6 +102,9 @@ class ElementarySurface:
         # Whether F can have poles (then a derivative of one sign does not
         # make F monotone on a box unless F is bounded there).
         self._kinks = [n for n in g.plan([self._f]) if g.ops[n] in ("abs", "max", "min")]
+        # R-functions whose crease is split into arcs by may_vanish.
+        self._creases = [n for n in g.plan([self._f]) if g.ops[n] == "rfun" and g.args[n][2] in g.arcs
+                         and g.arcs[g.args[n][2]] == tuple(g.args[n][:2])]
         self._poles = any(
             g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
             for n in g.plan([self._f]))
@@ -424,9 +427,10 @@ class ElementarySurface:
         lo, hi = self.corners(data)
         keep = self._may_vanish(lo, hi, axes, None)
         idx = np.nonzero(keep)[0]
-        if len(idx) == 0 or not self._kinks:
+        kinks = self._kinks + self._creases
+        if len(idx) == 0 or not kinks:
             return keep
-        pieces = kink_pieces(self._graph, self._kinks, lo[idx], hi[idx])
+        pieces = kink_pieces(self._graph, kinks, lo[idx], hi[idx])
         flags = np.concatenate(pieces, axis=1)
         straddle = np.stack([p.sum(axis=1) > 1 for p in pieces], 1)
         some = straddle.any(axis=1)
@@ -440,7 +444,7 @@ class ElementarySurface:
         for g_i, pattern in enumerate(patterns):
             members = idx[inverse == g_i]
             choices = []
-            for k, node in enumerate(self._kinks):
+            for k, node in enumerate(kinks):
                 act = np.nonzero(pattern[starts[k]:starts[k + 1]])[0]
                 if len(act) > 1:
                     choices.append((kink_key(self._graph, node), act))
