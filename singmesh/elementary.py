@@ -147,6 +147,9 @@ class ElementarySurface:
     def __repr__(self) -> str:
         return f"ElementarySurface({str(self.expr)!r})"
 
+    def __str__(self) -> str:
+        return str(self.expr)
+
     # ------------------------------------------------------------ points
     def _points(self, points):
         p = np.asarray(points, dtype=float)
