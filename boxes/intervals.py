@@ -384,8 +384,6 @@ class Graph:
             stack.extend(self.args[n])
         return sorted(need)
 
-    def has_kinks(self, outputs) -> bool:
-        return any(self.ops[n] in ("abs", "min", "max", "sgn", "maxd", "mind", "unit") for n in self.plan(outputs))
 
 
 # ------------------------------------------------------------------ intervals

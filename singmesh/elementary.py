@@ -535,7 +535,9 @@ class ElementarySurface:
         s1 = np.asarray(s1, float).reshape(-1)
         u, v = (axis + 1) % 3, (axis + 2) % 3
         g, f, d = self._graph, self._f, self._grad[axis]
-        min_width = tol.ELEMENTARY_ROOT_PIECE * np.abs(s1 - s0)
+        # (never below a few ulps: a piece must still halve)
+        min_width = np.maximum(tol.ELEMENTARY_ROOT_PIECE * np.abs(s1 - s0),
+                               8 * np.spacing(np.maximum(np.abs(s0), np.abs(s1))))
 
         def boxes(row, a, b):
             lo = np.empty((len(row), 3))
