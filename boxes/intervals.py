@@ -479,9 +479,10 @@ def _unit(fl, fh, gl, gh):
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         g1 = np.where(fl >= 0, mag, mig)
         g2 = np.where(fh >= 0, mig, mag)
-        lo = fl / np.sqrt(fl * fl + g1 * g1)
-        hi = fh / np.sqrt(fh * fh + g2 * g2)
-    # Three roundings of half an ulp each: 4 ulps is room enough.
+        # hypot: no overflow of the squares (1e200 / inf would read 0).
+        lo = fl / np.hypot(fl, g1)
+        hi = fh / np.hypot(fh, g2)
+    # Two roundings (hypot within one ulp): 4 ulps is room enough.
     lo = lo - (np.abs(lo) * 4 * _EPS + _TINY)
     hi = hi + (np.abs(hi) * 4 * _EPS + _TINY)
     return lo, hi
