@@ -8,7 +8,7 @@ points in floating point (:func:`point_eval`, :func:`magnitude_eval`).
 
 Bounds are guaranteed: every bound is moved outwards after each
 operation (one ulp by ``np.nextafter`` after the correctly rounded ones,
-``FUNCTION_ULPS`` relative ulps after the library's transcendental ones),
+``tol.INTERVAL_FUNCTION_ULPS`` relative ulps after the library's transcendental ones),
 constants that are not doubles are enclosed by their two neighbours, and
 each function uses its exact monotonicity ranges (sin and cos over their
 periods, tan's poles, even/odd/negative/fractional powers, division by an
@@ -37,12 +37,10 @@ import math
 import numpy as np
 import sympy
 
+from singmesh import tolerances as tol
 from singmesh.errors import SurfaceError
 
-#: Relative widening (in ulps) of the results of numpy's transcendental
-#: functions and powers, which are not correctly rounded (glibc and
-#: numpy's SIMD versions are within 4 ulps).
-FUNCTION_ULPS = 8.0
+FUNCTION_ULPS = tol.INTERVAL_FUNCTION_ULPS
 _EPS = float(np.finfo(float).eps)
 _TINY = 1e-300
 _BIG = float(np.finfo(float).max)
