@@ -8,7 +8,7 @@ points in floating point (:func:`point_eval`, :func:`magnitude_eval`).
 
 Bounds are guaranteed: every bound is moved outwards after each
 operation (one ulp by ``np.nextafter`` after the correctly rounded ones,
-``FUNCTION_ULPS`` relative ulps after the library's transcendental ones),
+``tol.INTERVAL_FUNCTION_ULPS`` relative ulps after the library's transcendental ones),
 constants that are not doubles are enclosed by their two neighbours, and
 each function uses its exact monotonicity ranges (sin and cos over their
 periods, tan's poles, even/odd/negative/fractional powers, division by an
@@ -37,12 +37,10 @@ import math
 import numpy as np
 import sympy
 
+from singmesh import tolerances as tol
 from singmesh.errors import SurfaceError
 
-#: Relative widening (in ulps) of the results of numpy's transcendental
-#: functions and powers, which are not correctly rounded (glibc and
-#: numpy's SIMD versions are within 4 ulps).
-FUNCTION_ULPS = 8.0
+FUNCTION_ULPS = tol.INTERVAL_FUNCTION_ULPS
 _EPS = float(np.finfo(float).eps)
 _TINY = 1e-300
 _BIG = float(np.finfo(float).max)
@@ -70,6 +68,9 @@ class Graph:
         self._index: dict = {}
         self._sympy: dict = {}
         self._diff: dict = {}
+        #: sqrt(f^2 + g^2) node -> (f, g) of an R-function: its crease
+        #: (f = g = 0) is split into ARCS pieces by the angle of (f, g).
+        self.arcs: dict = {}
         for i in range(3):
             self.node("var", (), i)
         self.zero = self.const(0.0)
@@ -227,10 +228,15 @@ class Graph:
                 continue
             f, g = (a.base for a in root.base.args)
             rest = e - t
-            if rest - f - g != 0:
+            # sympy writes (-g)^2 as g^2: try both signs of each.
+            signs = [(sf, sg) for sf in (1, -1) for sg in (1, -1) if rest - sf * f - sg * g == 0]
+            if not signs:
                 continue
+            f, g = signs[0][0] * f, signs[0][1] * g
             nf, ng = self.from_sympy(f), self.from_sympy(g)
             sq = self.from_sympy(root)
+            if nf != ng:
+                self.arcs.setdefault(sq, (nf, ng))
             return self.node("rfun", (nf, ng, sq), sign)
         return None
 
@@ -301,7 +307,10 @@ class Graph:
                 # where the plain rule's 1/sqrt would be infinite.
                 out = self.zero
                 for f in squares:
-                    out = self.add(out, self.mul(self.node("unit", (f, n)), self.diff(f, v)))
+                    # With two squares, the other base rides along: the
+                    # ratio's bounds are then exact (see _unit).
+                    other = tuple(h for h in squares if h != f) if len(squares) == 2 else ()
+                    out = self.add(out, self.mul(self.node("unit", (f, n) + other[:1]), self.diff(f, v)))
                 return out
             inner = self.mul(self.const(0.5), self.powi(n, -1))
         elif op == "exp":
@@ -336,13 +345,13 @@ class Graph:
             f, g, r = args
             sign = self.const(float(p))
             out = self.zero
-            for h in (f, g):
-                factor = self.add(self.one, self.mul(sign, self.node("unit", (h, r))))
+            for h, other in ((f, g), (g, f)):
+                factor = self.add(self.one, self.mul(sign, self.node("unit", (h, r, other))))
                 out = self.add(out, self.mul(factor, self.diff(h, v)))
             return out
         elif op == "unit":
             # d(f/r) = (f' - (f/r) r') / r
-            f, r = args
+            f, r = args[:2]
             return self.mul(self.sub(self.diff(f, v), self.mul(n, self.diff(r, v))), self.powi(r, -1))
         else:  # pragma: no cover
             raise AssertionError(op)
@@ -373,8 +382,6 @@ class Graph:
             stack.extend(self.args[n])
         return sorted(need)
 
-    def has_kinks(self, outputs) -> bool:
-        return any(self.ops[n] in ("abs", "min", "max", "sgn", "maxd", "mind", "unit") for n in self.plan(outputs))
 
 
 # ------------------------------------------------------------------ intervals
@@ -460,6 +467,25 @@ def _periodic(lo, hi, fn, top, bottom, period=2 * _PI):
             np.where(nan, np.nan, np.minimum(rhi, 1.0)))
 
 
+def _unit(fl, fh, gl, gh):
+    """Bounds of f / sqrt(f^2 + g^2) on [fl, fh] x [gl, gh] (NaN where unknown).
+
+    It increases with f; for f > 0 it falls as |g| grows, for f < 0 it
+    rises: the extremes are at f's ends with |g| at its own.
+    """
+    mig, mag = _mig_mag(gl, gh)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        g1 = np.where(fl >= 0, mag, mig)
+        g2 = np.where(fh >= 0, mig, mag)
+        # hypot: no overflow of the squares (1e200 / inf would read 0).
+        lo = fl / np.hypot(fl, g1)
+        hi = fh / np.hypot(fh, g2)
+    # Two roundings (hypot within one ulp): 4 ulps is room enough.
+    lo = lo - (np.abs(lo) * 4 * _EPS + _TINY)
+    hi = hi + (np.abs(hi) * 4 * _EPS + _TINY)
+    return lo, hi
+
+
 def _rfun(fl, fh, gl, gh, rl, rh, sign):
     """Bounds of f + g + sign sqrt(f^2 + g^2) (increasing in f and g).
 
@@ -486,10 +512,24 @@ def _rfun(fl, fh, gl, gh, rl, rh, sign):
     return np.where(nan, np.nan, lo), np.where(nan, np.nan, hi)
 
 
+#: Pieces of an R-function's crease: arcs of the angle t of (f, g),
+#: [j pi/4, (j+1) pi/4]; on each, the ranges of cos t and sin t (widened).
+ARCS = 8
+_T = np.arange(ARCS + 1) * (2 * _PI / ARCS)
+_ARC_RANGES = [
+    (np.minimum(fn(_T[:-1]), fn(_T[1:])) - 1e-12, np.maximum(fn(_T[:-1]), fn(_T[1:])) + 1e-12)
+    for fn in (np.cos, np.sin)
+]
+
+
 def kink_key(graph: Graph, n: int):
-    """The key of a max, min or abs node for ``interval_eval``'s ``force``."""
+    """The key of a max, min, abs or R-function node for ``interval_eval``'s ``force``."""
     op = graph.ops[n]
-    return ("abs", graph.args[n][0]) if op == "abs" else (op, tuple(graph.args[n]))
+    if op == "abs":
+        return ("abs", graph.args[n][0])
+    if op == "rfun":
+        return ("arc", graph.args[n][2])
+    return (op, tuple(graph.args[n]))
 
 
 def kink_pieces(graph: Graph, kinks, lo, hi) -> list[np.ndarray]:
@@ -498,7 +538,7 @@ def kink_pieces(graph: Graph, kinks, lo, hi) -> list[np.ndarray]:
     A max's argument i is active where its upper bound reaches the largest
     lower bound (a min's: the other way); abs has the pieces (+, -).
     """
-    args = sorted({a for k in kinks for a in graph.args[k]})
+    args = sorted({a for k in kinks for a in graph.args[k][:2 if graph.ops[k] == "rfun" else None]})
     r = interval_eval(graph, args, lo, hi)
     L = dict(zip(args, r.lo))
     H = dict(zip(args, r.hi))
@@ -507,6 +547,13 @@ def kink_pieces(graph: Graph, kinks, lo, hi) -> list[np.ndarray]:
         op, a = graph.ops[k], graph.args[k]
         if op == "abs":
             out.append(np.stack([H[a[0]] >= 0, L[a[0]] <= 0], 1))
+        elif op == "rfun":
+            # Every arc where the box may reach the crease f = g = 0; one
+            # piece (the plain bounds) elsewhere.
+            crease = (L[a[0]] <= 0) & (H[a[0]] >= 0) & (L[a[1]] <= 0) & (H[a[1]] >= 0)
+            act = np.repeat(crease[:, None], ARCS, axis=1)
+            act[:, 0] = True
+            out.append(act)
         elif op == "max":
             floor = np.maximum.reduce([L[b] for b in a])
             out.append(np.stack([H[b] >= floor for b in a], 1))
@@ -655,6 +702,17 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
                 p1, p2, p3, p4 = al * il, al * ih, ah * il, ah * ih
                 rl = np.maximum(_down(np.fmin(np.fmin(p1, p2), np.fmin(p3, p4))), -1.0)
                 rh = np.minimum(_up(np.fmax(np.fmax(p1, p2), np.fmax(p3, p4))), 1.0)
+                if len(args) == 3:
+                    ul, uh = _unit(al, ah, L[args[2]], H[args[2]])
+                    rl, rh = np.fmax(rl, ul), np.fmin(rh, uh)
+                key = ("arc", args[1])
+                if force and key in force and args[0] in graph.arcs.get(args[1], ()):
+                    # (f, g) / r = (cos t, sin t) with t in the chosen arc.
+                    role = graph.arcs[args[1]].index(args[0])
+                    arc_lo, arc_hi = _ARC_RANGES[role][0][force[key]], _ARC_RANGES[role][1][force[key]]
+                    rl, rh = np.maximum(rl, arc_lo), np.minimum(rh, arc_hi)
+                    empty = rl > rh
+                    rl, rh = np.where(empty, np.nan, rl), np.where(empty, np.nan, rh)
                 nan = np.isnan(al) | np.isnan(ah) | np.isnan(L[args[1]])
                 rl, rh = np.where(nan, np.nan, rl), np.where(nan, np.nan, rh)
             elif op in ("maxd", "mind"):

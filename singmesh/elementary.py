@@ -103,6 +103,9 @@ class ElementarySurface(Surface):
         # Whether F can have poles (then a derivative of one sign does not
         # make F monotone on a box unless F is bounded there).
         self._kinks = [n for n in g.plan([self._f]) if g.ops[n] in ("abs", "max", "min")]
+        # R-functions whose crease is split into arcs by may_vanish.
+        self._creases = [n for n in g.plan([self._f]) if g.ops[n] == "rfun" and g.args[n][2] in g.arcs
+                         and g.arcs[g.args[n][2]] == tuple(g.args[n][:2])]
         self._poles = any(
             g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
             for n in g.plan([self._f]))
@@ -144,6 +147,9 @@ class ElementarySurface(Surface):
 
     def __repr__(self) -> str:
         return f"ElementarySurface({str(self.expr)!r})"
+
+    def __str__(self) -> str:
+        return str(self.expr)
 
     # ------------------------------------------------------------ points
     def _points(self, points):
@@ -425,9 +431,10 @@ class ElementarySurface(Surface):
         lo, hi = self.corners(data)
         keep = self._may_vanish(lo, hi, axes, None)
         idx = np.nonzero(keep)[0]
-        if len(idx) == 0 or not self._kinks:
+        kinks = self._kinks + self._creases
+        if len(idx) == 0 or not kinks:
             return keep
-        pieces = kink_pieces(self._graph, self._kinks, lo[idx], hi[idx])
+        pieces = kink_pieces(self._graph, kinks, lo[idx], hi[idx])
         flags = np.concatenate(pieces, axis=1)
         straddle = np.stack([p.sum(axis=1) > 1 for p in pieces], 1)
         some = straddle.any(axis=1)
@@ -441,7 +448,7 @@ class ElementarySurface(Surface):
         for g_i, pattern in enumerate(patterns):
             members = idx[inverse == g_i]
             choices = []
-            for k, node in enumerate(self._kinks):
+            for k, node in enumerate(kinks):
                 act = np.nonzero(pattern[starts[k]:starts[k + 1]])[0]
                 if len(act) > 1:
                     choices.append((kink_key(self._graph, node), act))
@@ -529,7 +536,9 @@ class ElementarySurface(Surface):
         s1 = np.asarray(s1, float).reshape(-1)
         u, v = (axis + 1) % 3, (axis + 2) % 3
         g, f, d = self._graph, self._f, self._grad[axis]
-        min_width = tol.ELEMENTARY_ROOT_PIECE * np.abs(s1 - s0)
+        # (never below a few ulps: a piece must still halve)
+        min_width = np.maximum(tol.ELEMENTARY_ROOT_PIECE * np.abs(s1 - s0),
+                               8 * np.spacing(np.maximum(np.abs(s0), np.abs(s1))))
 
         def boxes(row, a, b):
             lo = np.empty((len(row), 3))

@@ -355,6 +355,12 @@ CURVE_MIN_CLUMP = 4
 # ---------------------------------------------------------------- non-polynomial F
 # (singmesh.elementary: interval bounds and Taylor jets instead of Bernstein forms)
 
+#: Interval bounds (boxes/intervals.py) are widened by this many relative
+#: ulps after numpy's transcendental functions and powers, which are not
+#: correctly rounded (glibc's and numpy's SIMD versions are within 4 ulps);
+#: after + - * / and sqrt (correctly rounded) one ulp (nextafter) suffices.
+INTERVAL_FUNCTION_ULPS = 8.0
+
 #: Order of the Taylor jets of a non-polynomial F (its ``degree``): what
 #: classification reads at a singular point (A_k up to k = 7, as the first
 #: of CLASSIFY_ORDERS does for polynomials).

@@ -31,6 +31,8 @@ SURFACES = {
     "sigmoid-union": (_sigmoid_union(), 1.0),
     "max-sphere-plane": (Max(x**2 + y**2 + z**2 - 1, z), 1.3),
     "cube": (Max(Abs(x), Abs(y), Abs(z)) - 0.7, 1.0),
+    # Seed 000's half sphere by the R-function union of F = x^2+y^2+z^2-1 and -z.
+    "half-sphere-R": ((x**2 + y**2 + z**2 - 1) - z + sqrt((x**2 + y**2 + z**2 - 1)**2 + z**2), 1.3),
 }
 
 

@@ -167,3 +167,16 @@ def test_rfunction_bounds_are_tight():
     want_lo = -0.9 - np.hypot(0.5, 0.4)
     want_hi = 0.5 - np.hypot(0.3, 0.2)
     assert want_lo - 1e-15 <= r.lo[0][0] <= want_lo and want_hi <= r.hi[0][0] <= want_hi + 1e-15
+
+
+def test_rfunction_derivative_bounds_with_huge_values():
+    """The ratio f / sqrt(f^2 + g^2) keeps its bounds where the squares overflow."""
+    g = Graph()
+    n = g.from_sympy(x + y - sqrt(x**2 + y**2))
+    dx = g.diff(n, 0)
+    lo = np.array([[-1e200, 1e199, 0.0]])
+    hi = np.array([[-1e199, 1e200, 0.0]])
+    r = interval_eval(g, [dx], lo, hi)
+    # F_x = 1 - x / sqrt(x^2 + y^2): from 1 + 1/sqrt(1.01) to 1 + 1/sqrt(101).
+    want_lo, want_hi = 1 + 1 / np.sqrt(101), 1 + 1 / np.sqrt(1.01)
+    assert want_lo - 1e-12 <= r.lo[0][0] <= want_lo and want_hi <= r.hi[0][0] <= want_hi + 1e-12

@@ -103,3 +103,12 @@ def test_polynomial_agrees_with_sympy_to_rounding():
         assert np.abs(got[np.add.outer(np.add.outer(np.arange(6), np.arange(6)), np.arange(6)) > 3]).max() <= 1e-13 * np.abs(want).max()
         val = float(poly.eval({x: p[0], y: p[1], z: p[2]}))
         assert abs(s(p) - val) <= 64 * np.finfo(float).eps * s.magnitude(p)
+        grad = np.array([want[1, 0, 0], want[0, 1, 0], want[0, 0, 1]])
+        hess = np.array([[2 * want[2, 0, 0], want[1, 1, 0], want[1, 0, 1]],
+                         [want[1, 1, 0], 2 * want[0, 2, 0], want[0, 1, 1]],
+                         [want[1, 0, 1], want[0, 1, 1], 2 * want[0, 0, 2]]])
+        size = np.abs(want).max()
+        np.testing.assert_allclose(s.gradient(p), grad, rtol=0, atol=1e-13 * size)
+        np.testing.assert_allclose(s.value_gradient(p)[1], grad, rtol=0, atol=1e-13 * size)
+        np.testing.assert_allclose(s.hessian(p), hess, rtol=0, atol=1e-13 * size)
+        assert np.all(s.gradient_magnitude(p) >= np.abs(grad) * (1 - 1e-12))
