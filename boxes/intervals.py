@@ -868,7 +868,10 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                         M[n] = np.abs(r)
             V[n] = r
             if magnitude and dm is not None:
-                M[n] = np.abs(r) + dm * M[args[0]]
+                # An argument without error propagates none, even where f'
+                # is infinite (sqrt at 0): inf * 0 would make it NaN.
+                mu = M[args[0]]
+                M[n] = np.abs(r) + np.where(mu == 0, 0.0, dm * mu)
             for b in args:
                 if last.get(b) == n and b not in keep:
                     V.pop(b, None)

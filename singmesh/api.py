@@ -24,7 +24,7 @@ from singmesh.skeleton.singular_curves import singular_curves
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .mesh import Mesh, SingularPointWarning
+from .mesh import EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
 
@@ -97,7 +97,9 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     # hand-offs, and on a machine shared with other work they compete for
     # the cores (Endrass octic: 32.9 s with two BLAS threads on two cores,
     # 29.9 s with one).
-    with threadpool_limits(limits=1, user_api="blas"):
+    # Non-polynomial F are NaN outside their domain and infinite at poles:
+    # the stages handle such values, numpy need not warn of each.
+    with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         return _mesh(surface, box, coarse, fine, params)
 
 
@@ -211,7 +213,23 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
+    if len(faces) == 0 and not len(points) and not len(curves.points):
+        warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _why_empty(surface: Surface, box: np.ndarray) -> str:
+    """One line saying why the mesh of ``surface`` in ``box`` is empty."""
+    s = np.linspace(0.0, 1.0, 9)
+    grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
+    with np.errstate(all="ignore"):
+        f = surface(box[:, 0] + grid * (box[:, 1] - box[:, 0]))
+    where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
+    if np.isnan(f).all():
+        return f"empty mesh: F = {surface.expr} is undefined everywhere in the box {where} (e.g. sqrt or log of a negative number)"
+    f = f[~np.isnan(f)]
+    sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
+    return f"empty mesh: the surface F = {surface.expr} does not meet the box {where} (F is {sign} there)"
 
 
 def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> int:

@@ -158,6 +158,13 @@ def main(argv: list[str] | None = None) -> int:
               '  singmesh classify "x^2+y^2-z^2" --at 0 0 0\n'
               "  singmesh gallery [--out DIR] [--only NAME ...] [--jobs N]", file=sys.stderr)
         return 0 if argv and argv[0] in ("-h", "--help") else 2
+    import warnings
+
+    def one_line(message, category, *rest, **kw):
+        # A warning is one line, as errors are: no source line under it.
+        print(f"singmesh: warning: {message}", file=sys.stderr)
+
+    warnings.showwarning = one_line
     try:
         return COMMANDS[argv[0]](argv[1:])
     except SurfaceError as exc:

@@ -51,6 +51,9 @@ from singmesh.surface import Surface
 from singmesh.syntax import VARIABLES, read_equation
 
 _EPS = float(np.finfo(float).eps)
+#: Bounds this small are the intervals' outward rounding of an exact zero
+#: (boxes.intervals widens by 1e-300 per operation), not a value of F.
+_FLAT_FLOOR = 1e-250
 _OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
 
 
@@ -58,7 +61,8 @@ def _imul(al, ah, bl, bh):
     """Interval product, rounded outwards (0 * inf counts as 0)."""
     with np.errstate(invalid="ignore", over="ignore"):
         p = np.stack([al * bl, al * bh, ah * bl, ah * bh])
-    return np.nextafter(np.nanmin(p, axis=0), -np.inf), np.nextafter(np.nanmax(p, axis=0), np.inf)
+    # fmin/fmax skip NaN (0 * inf) without nanmin's warning on all-NaN columns.
+    return np.nextafter(np.fmin.reduce(p, axis=0), -np.inf), np.nextafter(np.fmax.reduce(p, axis=0), np.inf)
 
 
 def _one_sign(lo, hi):
@@ -209,7 +213,8 @@ class ElementarySurface(Surface):
         """Whether F is zero at ``points`` to within its rounding error (NaN: no)."""
         p, shape = self._points(points)
         (v,), (m,) = point_eval(self._graph, [self._f], p, magnitude=True)
-        return (np.abs(v) <= tol.ZERO_ULPS * _EPS * m).reshape(shape)
+        # (log at 0 is -inf with an infinite magnitude: not a zero)
+        return (np.isfinite(v) & (np.abs(v) <= tol.ZERO_ULPS * _EPS * m)).reshape(shape)
 
     def taylor(self, point, order: int | None = None) -> np.ndarray:
         """Coefficients T[i, j, k] of u^i v^j w^k in F(point + (u, v, w)), degree <= order.
@@ -584,7 +589,7 @@ class ElementarySurface(Surface):
                 (fv,), (fm,) = values(np.concatenate([er, er, er]), np.concatenate([ea, eb, mid]))
                 k = len(ends)
                 fa, fb, fmid = fv[:k], fv[k:2 * k], fv[2 * k:]
-                zero = np.abs(fv) <= tol.ZERO_ULPS * _EPS * fm
+                zero = np.isfinite(fv) & (np.abs(fv) <= tol.ZERO_ULPS * _EPS * fm)
                 change = (fa < 0) != (fb < 0)
                 change &= ~np.isnan(fa) & ~np.isnan(fb)
                 br_row.append(er[change])
@@ -614,8 +619,22 @@ class ElementarySurface(Surface):
                 break
             row, a, b = row[split], a[split], b[split]
             c = (a + b) * 0.5
-            _, (cm,) = values(row, c)
-            flat = np.maximum(np.abs(flo[split]), np.abs(fhi[split])) <= tol.ZERO_ULPS * _EPS * cm
+            k = len(row)
+            (fv,), (fm,) = values(np.concatenate([row, row, row]), np.concatenate([a, b, c]))
+            cm = fm[2 * k:]
+            # A piece on which F is infinite or undefined at both ends and in
+            # the middle lies in a pole or outside the domain (x / y on the
+            # line y = 0): halving it would go on to the smallest width,
+            # doubling the pieces at every step.  It holds no root we could
+            # place.
+            hopeless = ~np.isfinite(fv).reshape(3, k).any(axis=0)
+            # (The absolute floor: where F's terms are all zero, as on a line
+            # lying in x / y = 0, its bounds are the outward rounding alone,
+            # a few 1e-300, and the piece would be halved to the end.)
+            flat = np.maximum(np.abs(flo[split]), np.abs(fhi[split])) <= tol.ZERO_ULPS * _EPS * cm + _FLAT_FLOOR
+            flat &= ~hopeless & np.isfinite(cm)   # (not at a pole: F is infinite there)
+            row, a, b, c, flat = (row[~hopeless], a[~hopeless], b[~hopeless], c[~hopeless],
+                                  flat[~hopeless])
             out_row.append(row[flat])
             out_s.append(c[flat])
             row, a, b, c = row[~flat], a[~flat], b[~flat], c[~flat]
@@ -648,6 +667,7 @@ class ElementarySurface(Surface):
             p[:, v] = fixed[r, 1]
             return p
 
+        width = b - a
         a, b = a.copy(), b.copy()
         fa_neg = point_eval(g, [f], pts(row, a))[0] < 0
         x = 0.5 * (a + b)
@@ -671,11 +691,19 @@ class ElementarySurface(Surface):
             x[active] = np.where(fx == 0, xa, xn)
             active = active[~done]
         (fv,), (fm,) = point_eval(g, [f], pts(row, x), magnitude=True)
-        good = np.abs(fv) <= tol.ELEMENTARY_ROOT_RESIDUAL * fm
+        good = np.isfinite(fv) & (np.abs(fv) <= tol.ELEMENTARY_ROOT_RESIDUAL * fm)
         if self._poles:
             # A sign change across a pole: F is unbounded next to x.
             delta = 4 * np.spacing(np.maximum(np.abs(a), np.abs(b))) + 1e-300
             lo, hi = pts(row, x - delta), pts(row, x + delta)
             r = interval_eval(g, [f], lo, hi)
             good &= np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
+            # Bisection also closes in on a pole, to a point where F is
+            # finite but huge (-0.5 / 1e-300), and relative to its own
+            # magnitude that is a zero.  Next to a root |F| grows, next to
+            # a pole it falls.
+            h = np.maximum(1e-6 * width, 4 * np.spacing(np.abs(x)))
+            (fl, fr) = (point_eval(g, [f], pts(row, x - h))[0], point_eval(g, [f], pts(row, x + h))[0])
+            with np.errstate(invalid="ignore"):
+                good &= np.abs(fv) <= np.fmax(np.abs(fl), np.abs(fr))
         return x, good

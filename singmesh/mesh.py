@@ -26,6 +26,10 @@ class SingularPointWarning(UserWarning):
     """A singular point is not meshed as it is (not a vertex, or wrong branches)."""
 
 
+class EmptyMeshWarning(UserWarning):
+    """The mesh has no triangle: the surface does not meet the box (the warning says why)."""
+
+
 @dataclass
 class Mesh:
     """A triangle mesh of a surface F = 0 inside a box.

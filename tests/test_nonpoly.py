@@ -156,3 +156,48 @@ def test_polynomial_written_with_sqrt_matches_the_polynomial():
         assert mc.euler(m.vertices, m.faces) == 0 and mc.components(m.faces) == 1
     x, y, z = poly.vertices.T
     assert np.abs((np.sqrt(x * x + y * y) - 0.8) ** 2 + z * z - 0.09).max() < 1e-9
+
+
+# ------------------------------------------------------------ poles and domains
+POLES = [
+    # text, numpy F: poles (x / y on the plane y = 0, tan), logs, roots of
+    # negative numbers (the surface ends where F's domain does)
+    ("x / y - 0.5", lambda x, y, z: x / y - 0.5),
+    ("x / y", lambda x, y, z: x / y),
+    ("sqrt(x) + y - 0.5", lambda x, y, z: np.sqrt(x) + y - 0.5),
+    ("log(x) + y", lambda x, y, z: np.log(x) + y),
+    ("tan(3 x) + y", lambda x, y, z: np.tan(3 * x) + y),
+    ("x^(1/3) - y", lambda x, y, z: np.where(x >= 0, np.abs(x) ** (1 / 3), np.nan) - y),
+]
+
+
+@pytest.mark.parametrize("text, f", POLES, ids=[p[0] for p in POLES])
+def test_poles_and_domain_edges_leave_no_vertex_off_the_surface(text, f):
+    # A lattice line lying in the pole (x / y on y = 0) or a sign change
+    # across it must not become a sheet, nor a vertex where F is undefined.
+    m = singmesh.mesh(text, B1, coarse=16, fine=64)
+    assert len(m.faces) > 50
+    with np.errstate(all="ignore"):
+        v = f(*m.vertices.T)
+    assert np.isfinite(v).all()
+    assert np.abs(v).max() <= 1e-12
+    assert mc.non_manifold_edges(m.faces) == []
+
+
+def test_inverse_square_sphere():
+    # 1/r^2 - 1 = 0 is the unit sphere; the pole at the centre is inside.
+    m = singmesh.mesh("1/(x^2+y^2+z^2) - 1", B15)
+    assert mc.euler(m.vertices, m.faces) == 2 and mc.boundary_edges(m.faces) == []
+    assert np.abs(np.linalg.norm(m.vertices, axis=1) - 1).max() < 1e-12
+
+
+@pytest.mark.parametrize("text, words", [
+    ("sqrt(-1 - x^2) + y", "undefined everywhere"),
+    ("log(-1 - x^2) + y", "undefined everywhere"),
+    ("exp(x) + 1", "does not meet the box.*positive"),
+    ("x^2 + y^2 + z^2 + 1", "does not meet the box.*positive"),
+])
+def test_an_empty_mesh_is_said(text, words):
+    with pytest.warns(singmesh.EmptyMeshWarning, match=words):
+        m = singmesh.mesh(text, B1, coarse=8, fine=16)
+    assert len(m.faces) == 0
