@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.surface import Surface
 
 from .octree import Octree
 
@@ -105,7 +106,7 @@ def leaf_edges(tree: Octree):
     return np.concatenate(rows) if rows else np.zeros((0, 5), np.int64)
 
 
-def compute_events(surface, tree: Octree) -> Events:
+def compute_events(surface: Surface, tree: Octree) -> Events:
     """Crossing events of F + eps on every lattice line carrying leaf edges."""
     edges = leaf_edges(tree)
     keys = line_keys(edges[:, 0], edges[:, 1], edges[:, 2])

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from singmesh.surface import Surface
+
 from .edges import Events
 from .octree import Octree, node_keys
 
@@ -89,7 +91,7 @@ def contact_squares(tree: Octree):
     return rows[first], owners[first], sides[first]
 
 
-def graph_modes(surface, tree: Octree, squares, owner, owner_side) -> np.ndarray:
+def graph_modes(surface: Surface, tree: Octree, squares, owner, owner_side) -> np.ndarray:
     """0: the face curve is a graph over u; 1: over v; 2: neither is known.
 
     Read from the owner's face by ``surface.face_modes``: on the whole
@@ -180,7 +182,7 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     return sq[a], start, end, bad
 
 
-def face_links(surface, tree: Octree, events: Events) -> FaceLinks:
+def face_links(surface: Surface, tree: Octree, events: Events) -> FaceLinks:
     """Pair the events on every contact square into oriented links (``tree`` made for ``surface``)."""
     squares, owner, owner_side = contact_squares(tree)
     mode = graph_modes(surface, tree, squares, owner, owner_side)

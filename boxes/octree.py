@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.surface import CHILD_OFFSETS, Surface
 
 
 #: Bits per lattice coordinate and the shift of the level in a node key.
@@ -196,7 +197,7 @@ def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None,
     """
     leaves_d, leaves_c, leaves_l, leaves_s, internal = [], [], [], [], []
     start = {lvl: (d, c) for lvl, d, c in frontier}
-    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+    offsets = CHILD_OFFSETS  # child c of a split box: Surface.split's order
     data = corner = None
     for level in range(min(start), fine_level + 1):
         if level in start:
@@ -255,7 +256,7 @@ def _split_pruned(surface, data, corner, half, offsets):
     return np.concatenate(parts_d), np.concatenate(parts_c)
 
 
-def refine_stars(surface, tree: Octree, stars: np.ndarray) -> Octree:
+def refine_stars(surface: Surface, tree: Octree, stars: np.ndarray) -> Octree:
     """``tree`` with the leaves meeting the star regions split to the fine level.
 
     Leaves inside a star and leaves away from all stars stay as they are
@@ -304,7 +305,7 @@ def _concatenate_kept(data: np.ndarray, keep: np.ndarray, more: list) -> np.ndar
     return out
 
 
-def subdivide(surface, box, coarse_level: int, fine_level: int,
+def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
               keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None) -> Octree:
     """Subdivide ``box`` for the surface F = 0.
 

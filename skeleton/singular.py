@@ -24,7 +24,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from singmesh import tolerances as tol
-from singmesh.surface import Surface
+from singmesh.surface import CHILD_OFFSETS, Surface
 
 from .centre import centre, residual
 from .classify import NotSingularError
@@ -62,7 +62,7 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
         del kept[key]
     ends = []
     out = []
-    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+    offsets = CHILD_OFFSETS  # child c of a split box: Surface.split's order
     while todo:
         d, corner, lvl = todo.pop()
         if len(corner):
