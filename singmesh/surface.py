@@ -32,6 +32,7 @@ import sympy
 from singmesh.boxes import polynomial_bounds, polynomial_lines
 from singmesh.boxes.bernstein import bernstein_on_box
 from singmesh.boxes.bernstein import split as bernstein_split
+from singmesh.skeleton.splitting import compose
 
 from .errors import SurfaceError
 from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
@@ -404,8 +405,6 @@ class PolynomialSurface(Surface):
 
     def taylor(self, point, order: int | None = None) -> np.ndarray:
         """Taylor coefficients at ``point``: exact up to rounding at the default order (the degree)."""
-        from singmesh.skeleton.splitting import compose
-
         p = np.asarray(point, dtype=float).reshape(3)
         n = self.degree if order is None else int(order)
         T = compose(self.coeffs, p, np.eye(3), min(n, self.degree))
