@@ -42,6 +42,16 @@ def balls(curves, kinds=BALL_KINDS) -> np.ndarray:
     return np.array([sp.point for sp in curves.special if sp.kind in kinds]).reshape(-1, 3)
 
 
+def ball_grow(fine_level: int) -> float:
+    """How far (cells) the tube grows into non-simple leaves around pinch and triple points.
+
+    ``CURVE_BALL_GROW`` up to ``CURVE_BALL_FINE`` cells per box, then as
+    the square root of the cells per box (sheets meeting tangentially part
+    as the square of the distance).
+    """
+    return tol.CURVE_BALL_GROW * max(1.0, float(np.sqrt((1 << fine_level) / tol.CURVE_BALL_FINE)))
+
+
 def tangent_edges(curves) -> np.ndarray:
     """Which curve edges have branches that stay close far out (``CurveSet.wide``: tangent branches)."""
     # An empty CurveSet has no flags (and no edges).
@@ -62,7 +72,7 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
     wide = tangent_edges(curves)
     b = balls(curves)
-    reach = (tol.CURVE_BALL_GROW + 2) * cell
+    reach = (ball_grow(fine_level) + 2) * cell
     m = balls(curves, MEET_KINDS)
     meet_reach = (tol.CURVE_MEET_BALL + 2) * cell
     return np.concatenate([
@@ -133,7 +143,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
 
     Around the points ``balls`` (pinch and triple points, where sheets
     meet tangentially and stay close further out) the non-simple leaves
-    join up to ``CURVE_BALL_GROW`` cells away.  Along the edges flagged
+    join up to :func:`ball_grow` cells away.  Along the edges flagged
     ``wide`` (tangent sheets: a tacnode edge, whose sheets part only as
     the square of the distance) the tube's radius is ``wide_radius``
     cells, so that the sheets are apart where they leave it.
@@ -164,7 +174,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     if balls is not None and len(balls):
         b = (np.asarray(balls, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
         d_ball, _ = cKDTree(b).query(centre, p=np.inf)
-        reach |= d_ball <= half + tol.CURVE_BALL_GROW
+        reach |= d_ball <= half + ball_grow(tree.fine_level)
     if meets is not None and len(meets):
         m = (np.asarray(meets, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
         d_meet, _ = cKDTree(m).query(centre, p=np.inf)
@@ -173,7 +183,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     # outside it every leaf must be a union of discs.
     both = (links.minus >= 0) & (links.plus >= 0)
     a, b = links.minus[both], links.plus[both]
-    for _ in range(int(max(tol.CURVE_TUBE_GROW, tol.CURVE_BALL_GROW)) + 1):
+    for _ in range(int(max(tol.CURVE_TUBE_GROW, ball_grow(tree.fine_level))) + 1):
         grow = np.zeros(n, bool)
         grow[b[inside[a]]] = True
         grow[a[inside[b]]] = True

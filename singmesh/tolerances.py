@@ -307,8 +307,18 @@ CURVE_JOIN = 3.0
 CURVE_MERGE = 0.3
 
 #: Around pinch and triple points the non-simple leaves join the tube up
-#: to this many cells away (the sheets meet tangentially there).
+#: to this many cells away at a fine lattice of CURVE_BALL_FINE cells per
+#: box or coarser.  The sheets meet tangentially there and part only as
+#: the square of the distance, so the reach in cells where they are a
+#: cell apart grows as the square root of the cells per box: at 256 it is
+#: twice this (a rotated cross-cap's sheets were a cell apart 13.5 cells
+#: from a pinch point, two cylinders' 14 cells from where their double
+#: curves cross; a non-simple leaf left outside paired one sheet's events
+#: with the other's: a closed bubble of 8 triangles, an edge of 4).
+#: Growing further at 64 (where every leaf of the Roman surface is
+#: non-simple) took the whole box into the tube.
 CURVE_BALL_GROW = 10.0
+CURVE_BALL_FINE = 64
 
 #: Around a point where two cuspidal edges cross (Crixxi's (0, +-1, 0))
 #: every leaf within this many cells is tube: the two half-sheets between

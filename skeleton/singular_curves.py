@@ -737,12 +737,51 @@ def _graph(polylines: list, surface: Surface, h: float):
         remap[np.isin(remap, remap[chosen])] = remap[target]
     E = remap[E]
     E = E[E[:, 0] != E[:, 1]]
-    E = np.unique(np.sort(E, axis=1), axis=0)
+    E = _drop_chords(P, np.unique(np.sort(E, axis=1), axis=0))
     used = np.zeros(len(P), bool)
     used[E.ravel()] = True
     new = np.cumsum(used) - 1
     cross_vertices = np.unique([new[remap[c[0]]] for _, c in crossings]).astype(np.int64) if crossings else np.zeros(0, np.int64)
     return P[used], new[E], cross_vertices
+
+
+def _drop_chords(P: np.ndarray, E: np.ndarray) -> np.ndarray:
+    """The curve graph's edges (m, 2) without the longest edge of each triangle.
+
+    Where curves run closer than a step (curves tangent at the point
+    where they meet), merging crossings can join two vertices that a
+    trace also joins through a third: two paths, one the chord of the
+    other, along one curve.  The strips zip to both (edges of three
+    triangles); the path is kept.
+    """
+    from scipy.sparse import coo_matrix
+
+    for _ in range(8):
+        n = len(P)
+        if len(E) < 3:
+            return E
+        a = coo_matrix((np.ones(2 * len(E)), (np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]]))),
+                       shape=(n, n)).tocsr()
+        # Edges (i, j) with a common neighbour: (A @ A)[i, j] > 0.
+        common = np.asarray((a @ a)[E[:, 0], E[:, 1]]).ravel()
+        tri = np.nonzero(common > 0)[0]
+        if len(tri) == 0:
+            return E
+        length = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
+        # The longest edge of its triangles goes: an edge in a triangle
+        # whose two other edges are both shorter.
+        drop = np.zeros(len(E), bool)
+        index = {(int(i), int(j)): k for k, (i, j) in enumerate(E.tolist())}
+        for k in tri.tolist():
+            i, j = E[k]
+            for c in np.intersect1d(a[i].indices, a[j].indices).tolist():
+                ki, kj = index[tuple(sorted((int(i), c)))], index[tuple(sorted((int(j), c)))]
+                if length[k] > max(length[ki], length[kj]):
+                    drop[k] = True
+        if not drop.any():
+            return E
+        E = E[~drop]
+    return E
 
 
 # ---------------------------------------------------------------- types

@@ -442,3 +442,13 @@ def test_curve_running_just_inside_a_face_of_the_box():
     # box is off the lattice of the circle's plane (general position).
     check_curve_mesh("(x^2 + y^2 + z^2 - 1) z", ((-1.0041, 1.1), (-1.1, 1.1), (-1.1, 1.13)), 1, half_sheets=4)
 
+
+
+def test_curves_tangent_at_a_point_on_split_planes():
+    # y z (x^2 + y - z): three double curves, the x-axis and the parabolas
+    # y = -x^2 (in z = 0) and z = x^2 (in y = 0), all on lattice planes and
+    # tangent to each other at the origin, so closer than a cell over
+    # |x| < 0.09.  Merged crossings there joined two vertices of one
+    # parabola both by a trace and by a chord: the strips zipped to both
+    # (edges of three triangles).
+    check_curve_mesh("y z (x^2 + y - z)", BOX1, 1, coarse=16, fine=256)

@@ -91,3 +91,22 @@ def test_rotated_crixxi_is_cuspidal_edges_crossing_twice(seed):
     got = np.array([sp.point for sp in curves.special if sp.kind == "crossing of cuspidal edges"])
     d = np.linalg.norm(got[:, None] - want[None], axis=2)
     assert d.min(axis=1).max() <= 0.25 * 3.2 / 256 and len(set(d.argmin(axis=1).tolist())) == 2
+
+
+CROSSCAP = "4 x^2 (x^2 + y^2 + z^2 + z) + y^2 (y^2 + z^2 - 1)"
+
+
+def test_crosscap_sheets_near_a_pinch_point_stay_apart():
+    # Seed 4: 13.5 cells from a pinch point the two sheets are still a
+    # cell apart, round a lattice node between them; non-simple leaves
+    # there, outside the tube's ball, paired one sheet's events with the
+    # other's: a closed bubble of 8 triangles (two pieces).
+    check_curve_mesh(float_rotated(CROSSCAP, 4), ((-1.2, 1.2),) * 3, 1, coarse=16)
+
+
+def test_two_cylinders_sheets_near_a_tangential_crossing_stay_apart():
+    # Seed 11: where the double curves cross the cylinders are tangent;
+    # 14 cells out a lattice edge still meets both within one cell, and
+    # the leaves round it (non-simple, outside the ball) joined its two
+    # events by an edge of four triangles.
+    check_curve_mesh(float_rotated("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", 11), ((-1.5, 1.5),) * 3, 1, coarse=16)
