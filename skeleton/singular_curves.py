@@ -401,7 +401,11 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
         if not _inside(box, y):
             pts.append(_clip(surface, box, x, y, h))
             return pts[1:], "box"
-        if len(pts) > 3 and np.linalg.norm(y - x0) < 0.75 * h:
+        # Back at the start: at x0, or at the first vertex on the curve
+        # (a start Newton left off the curve, near a crossing, is never
+        # come back to within 0.75 h: the trace went round again and
+        # again, two cylinders at fine 256).
+        if len(pts) > 3 and min(np.linalg.norm(y - x0), np.linalg.norm(y - pts[1])) < 0.75 * h:
             return pts[1:], "closed"
         if earlier is not None and n > 0:
             d, i = earlier.query(y)

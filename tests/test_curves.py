@@ -150,6 +150,10 @@ def check_curve_mesh(text, box, components=1, half_sheets=None, **kw):
     many = n > 2
     assert singular[edges[many]].all()
     assert (n[many] % 2 == 0).all()
+    # A curve traced twice zips strips across its copies: edges of hundreds
+    # of triangles.  (Up to three sheets meet along these curves, 6 per
+    # edge; next to special points edges of 8 to 14 still occur, issue #9.)
+    assert n.max() <= 16, f"an edge of {n.max()} triangles"
     # The curve is followed by mesh edges between singular vertices, or by line cells.
     samples = singular_locus(text, box)
     inside = np.all((samples > box[:, 0] + 0.02 * size) & (samples < box[:, 1] - 0.02 * size), axis=1)
@@ -452,3 +456,20 @@ def test_curves_tangent_at_a_point_on_split_planes():
     # parabola both by a trace and by a chord: the strips zipped to both
     # (edges of three triangles).
     check_curve_mesh("y z (x^2 + y - z)", BOX1, 1, coarse=16, fine=256)
+
+
+def test_closed_curves_from_a_start_near_a_crossing_are_traced_once():
+    # Two cylinders at the default lattice: the first sample lies near a
+    # crossing of the two ellipses, off the curve by more than the closing
+    # distance, so the trace went round its ellipse four times; strips
+    # zipped across the copies into edges of a thousand triangles
+    # (1.7 million triangles on 72 thousand vertices).
+    # (test_classical_surfaces_with_singular_curves runs the independent
+    # checks on the same mesh.)
+    text, box = "(x^2 + y^2 - 1)(x^2 + z^2 - 1)", ((-1.5, 1.5),) * 3
+    m = mesh_quiet(text, box)
+    counts = np.array(list(mc.edge_counts(m.faces).values()))
+    assert counts.max() == 4
+    assert len(m.faces) < 2.2 * len(m.vertices)
+    crossings = [sp for sp in m.special_points if "crossing" in sp.kind]
+    assert sorted(np.round(sp.point[0], 6) for sp in crossings) == [-1.0, 1.0]
