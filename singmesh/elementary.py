@@ -500,7 +500,7 @@ class ElementarySurface(Surface):
                 op, args = g.ops[k], g.args[k]
                 if op == "abs":
                     a = args[0]
-                    out.append(_Kink(self, f"{self.expr}: Abs crease", g.substitute(f, k, a), a,
+                    out.append(_Kink(self, "Abs crease", g.substitute(f, k, a), a,
                                      g.substitute(f, k, g.neg(a)), (), op))
                     continue
                 for i, j in itertools.combinations(range(len(args)), 2):
