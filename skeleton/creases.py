@@ -51,6 +51,11 @@ def _newton(system: CreaseSystem, x: np.ndarray, reach, extra=None):
             if extra is not None:
                 v = np.concatenate([v, (np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3])[:, None]], 1)
                 g = np.concatenate([g, extra[:, None, :3]], 1)
+            # A point outside a piece's domain (|x|^2.5 with x < 0 once the
+            # Abs is replaced by x) stays where it is, and is refused below.
+            bad = ~(np.isfinite(v).all(axis=1) & np.isfinite(g).all(axis=(1, 2)))
+            if bad.any():
+                v, g = np.where(bad[:, None], 0.0, v), np.where(bad[:, None, None], 0.0, g)
             step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
             step = np.where(np.isfinite(step), step, 0.0)
             x_new = x - step
@@ -182,9 +187,9 @@ def _corner(systems: list, which: list, start: np.ndarray, h: float):
             vs, gs = zip(*(systems[s].values(x[None]) for s in which))
             v = np.concatenate([a[0] for a in vs])
             g = np.concatenate([a[0] for a in gs])
-            step = np.linalg.lstsq(g, v, rcond=1e-13)[0]
-            if not np.isfinite(step).all():
+            if not (np.isfinite(g).all() and np.isfinite(v).all()):
                 return None
+            step = np.linalg.lstsq(g, v, rcond=1e-13)[0]
             x_new = x - step
             if np.array_equal(x_new, x):
                 break

@@ -147,6 +147,9 @@ def test_crease_followed_by_edges(case):
     if corners is not None:
         dist = np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1)
         assert dist.max() <= 1e-12 * size, dist
+        # The report (as the CLI prints it) lists the 12 edges and 8 corners.
+        text = m.report_text()
+        assert "creases              12" in text and text.count("corner of creases") == 8
     # The rest of the mesh is right.
     _check_mesh(m, eq, box, closed)
 
