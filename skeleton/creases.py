@@ -119,13 +119,38 @@ def _clip(system: CreaseSystem, box: np.ndarray, x: np.ndarray, y: np.ndarray, h
     return np.clip(z, box[:, 0], box[:, 1])
 
 
+def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float):
+    """Where another crease meets crease ``si`` between its points x and y, or None.
+
+    Another kink whose two functions both come within two steps of y (to
+    first order) is tried: Gauss-Newton on the equations of both from y;
+    its point counts when it lies on the step from x to y and the other
+    kink is active there (an octahedron's vertex, where the Abs creases
+    x = 0 and y = 0 cross, or a cube's corner).
+    """
+    d = float(np.linalg.norm(y - x))
+    for sj, other in enumerate(systems):
+        if sj == si:
+            continue
+        v, g = other.values(y[None])
+        if not np.all(np.abs(v[0]) <= 2.0 * h * np.linalg.norm(g[0], axis=1)):
+            continue
+        z = _corner(systems, [si, sj], y, h)
+        if z is None or np.linalg.norm(z - x) > 1.05 * d or np.dot(z - x, y - x) <= 0:
+            continue
+        if other.active(z[None])[0]:
+            return z
+    return None
+
+
 def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float,
-                   max_steps: int):
+                   max_steps: int, systems: list | None = None, si: int = 0):
     """Vertices from x0 along t0 (x0 excluded) and how the trace ended.
 
     ``"box"``: the last vertex is on the box's boundary; ``"closed"``: back
     at x0; ``"end"``: the kink stops being active between the last vertex
-    and the point returned as third item; ``"lost"``: Newton lost it.
+    and the point returned as third item; ``"meet"``: the last vertex is
+    where another crease (of ``systems``) meets it; ``"lost"``: Newton lost it.
     """
     pts = [x0]
     t = t0
@@ -148,6 +173,14 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
                     pts.append(c)
                 return pts[1:], "box", None
             return pts[1:], "lost", None
+        if systems is not None and len(systems) > 1:
+            z = _crossing(systems, si, x, y, h)
+            if z is not None:
+                if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts[-1] = z
+                else:
+                    pts.append(z)
+                return pts[1:], "meet", None
         if not system.active(y[None])[0]:
             return pts[1:], "end", y
         if n > 2 and np.linalg.norm(y - x0) < 0.75 * h:
@@ -245,11 +278,11 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
                 continue
             x0 = samples[i]
             t0 = _tangent(system, x0)[0]
-            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps)
+            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si)
             if how_f == "closed":
                 back, how_b, out_b = [], "closed", None
             else:
-                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps)
+                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si)
             pts = np.array(back[::-1] + [x0] + fwd)
             for idx in tree.query_ball_point(pts, 1.5 * h):
                 covered[idx] = True
@@ -309,7 +342,7 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     E = np.concatenate(edges).reshape(-1, 2)
     remap = np.arange(len(P))
     special: dict[int, str] = {}
-    ends = [v for v, _, how in end_vertex if how == "end"]
+    ends = [v for v, _, how in end_vertex if how in ("end", "meet")]
     if ends:
         g = nx.Graph()
         g.add_nodes_from(ends)

@@ -44,6 +44,11 @@ CUBE_PAIRS = [(f"{a}{s}0.7", f"{b}{t}0.7") for a, b in (("x", "y"), ("x", "z"), 
 ROT_PAIRS = [(f"{_lin(R[i])}{s}0.5", f"{_lin(R[j])}{t}0.5") for i, j in ((0, 1), (0, 2), (1, 2))
              for s in "+-" for t in "+-"]
 CUBE_CORNERS = np.array([[a, b, c] for a in (-0.7, 0.7) for b in (-0.7, 0.7) for c in (-0.7, 0.7)])
+# The octahedron's creases: the Abs creases x = 0, y = 0, z = 0 on it, straight between its
+# vertices, where two of them cross (on the split planes of the symmetric box).
+OCTA_PAIRS = [(a, f"{s}{b}{t}{c}-1") for a, b, c in (("x", "y", "z"), ("y", "x", "z"), ("z", "x", "y"))
+              for s in ("", "-") for t in ("+", "-")]
+OCTA_CORNERS = np.vstack([np.eye(3), -np.eye(3)])
 CASES = [
     ("half-ball-max", f"Max({SPH}, z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}**2 + z**2)", 1.5, True, [(SPH, "z")], 1.0, None),
@@ -53,6 +58,7 @@ CASES = [
      np.inf, np.linalg.solve(R, CUBE_CORNERS.T / 1.4).T),
     ("half-ball-rotated", f"Max({SPH}, {_lin(N)})", 1.5, True, [(SPH, _lin(N))], 1.0, None),
     # Creases on split planes of the symmetric box: z = 0 and x = 0.
+    ("octahedron", "Abs(x) + Abs(y) + Abs(z) - 1", 1.3, True, OCTA_PAIRS, np.inf, OCTA_CORNERS),
     ("upper-half-ball", f"Max({SPH}, -z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("min-on-x0", f"Min({SPH}, x)", 1.5, False, [(SPH, "x")], 1.0, None),
 ]
@@ -147,9 +153,9 @@ def test_crease_followed_by_edges(case):
     if corners is not None:
         dist = np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1)
         assert dist.max() <= 1e-12 * size, dist
-        # The report (as the CLI prints it) lists the 12 edges and 8 corners.
+        # The report (as the CLI prints it) lists the 12 edges and the corners.
         text = m.report_text()
-        assert "creases              12" in text and text.count("corner of creases") == 8
+        assert "creases              12" in text and text.count("corner of creases") == len(corners)
     # The rest of the mesh is right.
     _check_mesh(m, eq, box, closed)
 
