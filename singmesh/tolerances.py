@@ -419,3 +419,8 @@ CREASE_NEWTON = 30
 #: this many trace steps are one corner, placed by Gauss-Newton on the
 #: equations of all the creases meeting there.
 CREASE_CORNER = 1.5
+
+#: Ends on the box of two creases closer than this many fine cells are
+#: joined along the surface's trace on the box face (twice the tubes'
+#: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
+CREASE_BOX_JOIN = 12.0

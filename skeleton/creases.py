@@ -319,7 +319,73 @@ def crease_curves(surface: Surface, box, step: float, level: int | None = None) 
             else:
                 lines[k][1] = np.vstack([p[:-1] if near else p, x[None]])
     lines = _densify(systems, [(s, p, c, tuple(how)) for s, p, c, how, _ in lines], tol.CREASE_TRACE_STEP)
-    return _curve_set(systems, lines, box, step)
+    return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
+
+
+def _join_on_box(surface: Surface, curves: CurveSet, box: np.ndarray, step: float) -> CurveSet:
+    """Ends on the box of two creases a few cells apart, joined by the surface's trace on that face.
+
+    Where a corner of creases lies just outside the box (a rotated cube
+    poking out of it), its creases end on one face of the box closer than
+    the tubes around them are wide: the piece of surface between them
+    there has no rail of its own, and the strips reach it only along the
+    curve graph.  The trace of that piece on the face (vertices ``step``
+    apart, on F = 0 and on the face) joins the two ends as graph edges
+    that belong to no crease.
+    """
+    ends = [(int(v), sp.point) for v, sp in zip(curves.special_vertex.tolist(), curves.special)
+            if sp.kind == "end on the box"]
+    if len(ends) < 2:
+        return curves
+    piece = np.full(len(curves.points), -1)
+    for i, c in enumerate(curves.pieces):
+        piece[np.asarray(c.vertices)] = i
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    reach = tol.CREASE_BOX_JOIN * step
+    new_pts, new_edges = [], []
+    n = len(curves.points)
+    for i in range(len(ends)):
+        for j in range(i + 1, len(ends)):
+            (a, pa), (b, pb) = ends[i], ends[j]
+            d = float(np.linalg.norm(pb - pa))
+            if piece[a] == piece[b] or d > reach:
+                continue
+            face = (np.abs(pa - box[:, 0]) <= 1e-9 * size) & (np.abs(pb - box[:, 0]) <= 1e-9 * size)
+            side = 0
+            if not face.any():
+                face = (np.abs(pa - box[:, 1]) <= 1e-9 * size) & (np.abs(pb - box[:, 1]) <= 1e-9 * size)
+                side = 1
+            if not face.any():
+                continue
+            axis = int(np.argmax(face))
+            k = max(1, int(np.ceil(d / step)))
+            t = np.arange(1, k)[:, None] / k
+            chord = pa + t * (pb - pa)
+            x = chord.copy()
+            with np.errstate(all="ignore"):
+                for _ in range(tol.CREASE_NEWTON):
+                    f, g = surface.value_gradient(x)
+                    g = g.copy()
+                    g[:, axis] = 0.0  # steps within the face
+                    gg = np.einsum("ki,ki->k", g, g)
+                    x = x - (f / np.where(gg > 0, gg, np.inf))[:, None] * g
+                x[:, axis] = box[axis, side]
+                f, g = surface.value_gradient(x)
+                off = np.abs(f) / np.linalg.norm(g, axis=1)
+            # The trace must run close to the chord (one piece of one face) and lie on F = 0.
+            if not (np.all(np.isfinite(x)) and np.all(np.linalg.norm(x - chord, axis=1) <= 0.25 * step)
+                    and np.all(off <= 1e-12 * size)):
+                continue
+            idx = [a] + list(range(n, n + len(x))) + [b]
+            n += len(x)
+            new_pts.append(x)
+            new_edges += list(zip(idx[:-1], idx[1:]))
+    if not new_edges:
+        return curves
+    points = np.vstack([curves.points] + new_pts)
+    edges = np.vstack([curves.edges, np.array(new_edges, np.int64)])
+    return CurveSet(points=points, edges=edges, pieces=curves.pieces, special=curves.special,
+                    special_vertex=curves.special_vertex, wide=np.zeros(len(edges), bool))
 
 
 def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> CurveSet:

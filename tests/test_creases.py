@@ -41,9 +41,17 @@ N = _rotation(5)[0]
 #: creases (inf: straight), corners (points that must be vertices).
 CUBE_PAIRS = [(f"{a}{s}0.7", f"{b}{t}0.7") for a, b in (("x", "y"), ("x", "z"), ("y", "z"))
               for s in "+-" for t in "+-"]
-ROT_PAIRS = [(f"{_lin(R[i])}{s}0.5", f"{_lin(R[j])}{t}0.5") for i, j in ((0, 1), (0, 2), (1, 2))
-             for s in "+-" for t in "+-"]
+
+
+def _rot_pairs(a):
+    """The 12 edges of the rotated cube of half-width a: pairs of face planes."""
+    return [(f"{_lin(R[i])}{s}{a}", f"{_lin(R[j])}{t}{a}") for i, j in ((0, 1), (0, 2), (1, 2))
+            for s in "+-" for t in "+-"]
+
+
+ROT_PAIRS, ROT_PAIRS_CUT = _rot_pairs(0.5), _rot_pairs(0.7)
 CUBE_CORNERS = np.array([[a, b, c] for a in (-0.7, 0.7) for b in (-0.7, 0.7) for c in (-0.7, 0.7)])
+CUT_CORNERS = np.linalg.solve(R, CUBE_CORNERS.T).T
 # The octahedron's creases: the Abs creases x = 0, y = 0, z = 0 on it, straight between its
 # vertices, where two of them cross (on the split planes of the symmetric box).
 OCTA_PAIRS = [(a, f"{s}{b}{t}{c}-1") for a, b, c in (("x", "y", "z"), ("y", "x", "z"), ("z", "x", "y"))
@@ -56,6 +64,9 @@ CASES = [
     # (its corners 0.866 from the centre: inside the box)
     ("cube-rotated", "Max(Abs({}), Abs({}), Abs({})) - 0.5".format(*(_lin(r) for r in R)), 1.0, True, ROT_PAIRS,
      np.inf, np.linalg.solve(R, CUBE_CORNERS.T / 1.4).T),
+    # ... and one whose corners poke out of the box: creases end on its faces a few cells apart.
+    ("cube-rotated-cut", "Max(Abs({}), Abs({}), Abs({})) - 0.7".format(*(_lin(r) for r in R)), 1.0, False,
+     ROT_PAIRS_CUT, np.inf, CUT_CORNERS[np.all(np.abs(CUT_CORNERS) < 1, axis=1)]),
     ("half-ball-rotated", f"Max({SPH}, {_lin(N)})", 1.5, True, [(SPH, _lin(N))], 1.0, None),
     # Creases on split planes of the symmetric box: z = 0 and x = 0.
     ("octahedron", "Abs(x) + Abs(y) + Abs(z) - 1", 1.3, True, OCTA_PAIRS, np.inf, OCTA_CORNERS),
