@@ -33,6 +33,7 @@ from .singular_curves import CurveSet, SingularCurve, SpecialPoint
 
 #: The type of a crease's pieces in :class:`CurveSet`.
 CREASE = "crease"
+_EPS = float(np.finfo(float).eps)
 
 
 # ---------------------------------------------------------------- Newton
@@ -59,9 +60,11 @@ def _newton(system: CreaseSystem, x: np.ndarray, reach, extra=None):
             step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
             step = np.where(np.isfinite(step), step, 0.0)
             x_new = x - step
-            if np.array_equal(x_new, x):
-                break
+            # Converged everywhere: steps at rounding level of the points.
+            small = np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0))
             x = x_new
+            if small:
+                break
         v, g = system.values(x)
         size = np.linalg.norm(g, axis=2) * np.maximum(np.abs(x).max(axis=1), 1.0)[:, None]
         ok = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)
@@ -119,7 +122,7 @@ def _clip(system: CreaseSystem, box: np.ndarray, x: np.ndarray, y: np.ndarray, h
     return np.clip(z, box[:, 0], box[:, 1])
 
 
-def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float):
+def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, near=None):
     """Where another crease meets crease ``si`` between its points x and y, or None.
 
     Another kink whose two functions both come within two steps of y (to
@@ -130,7 +133,7 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float):
     """
     d = float(np.linalg.norm(y - x))
     for sj, other in enumerate(systems):
-        if sj == si:
+        if sj == si or (near is not None and not near(sj, y)):
             continue
         v, g = other.values(y[None])
         if not np.all(np.abs(v[0]) <= 2.0 * h * np.linalg.norm(g[0], axis=1)):
@@ -144,7 +147,7 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float):
 
 
 def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float,
-                   max_steps: int, systems: list | None = None, si: int = 0):
+                   max_steps: int, systems: list | None = None, si: int = 0, near=None):
     """Vertices from x0 along t0 (x0 excluded) and how the trace ended.
 
     ``"box"``: the last vertex is on the box's boundary; ``"closed"``: back
@@ -174,7 +177,7 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
                 return pts[1:], "box", None
             return pts[1:], "lost", None
         if systems is not None and len(systems) > 1:
-            z = _crossing(systems, si, x, y, h)
+            z = _crossing(systems, si, x, y, h, near)
             if z is not None:
                 if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
                     pts[-1] = z
@@ -224,9 +227,10 @@ def _corner(systems: list, which: list, start: np.ndarray, h: float):
                 return None
             step = np.linalg.lstsq(g, v, rcond=1e-13)[0]
             x_new = x - step
-            if np.array_equal(x_new, x):
-                break
+            small = np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0))
             x = x_new
+            if small:
+                break
         vs, gs = zip(*(systems[s].values(x[None]) for s in which))
         v = np.concatenate([a[0] for a in vs])
         size = np.linalg.norm(np.concatenate([a[0] for a in gs]), axis=1) * max(float(np.abs(x).max()), 1.0)
@@ -266,8 +270,17 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
     diameter = float(np.linalg.norm(box[:, 1] - box[:, 0]))
     max_steps = int(8 * diameter / h) + 16
     lines = []
+    found = [crease_samples(surface, system, box, level) for system in systems]
+    # Another kink's crease can only meet this one near its own samples
+    # (one per box of the search where it is active).
+    radius = 2.0 * h + float(np.linalg.norm(box[:, 1] - box[:, 0])) / (1 << level)
+    trees = [cKDTree(p) if len(p) else None for p in found]
+
+    def near(sj, y):
+        return trees[sj] is not None and trees[sj].query(y, distance_upper_bound=radius)[0] <= radius
+
     for si, system in enumerate(systems):
-        samples = crease_samples(surface, system, box, level)
+        samples = found[si]
         if len(samples) == 0:
             continue
         samples = samples[np.lexsort(samples.T[::-1])]
@@ -278,11 +291,11 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
                 continue
             x0 = samples[i]
             t0 = _tangent(system, x0)[0]
-            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si)
+            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near)
             if how_f == "closed":
                 back, how_b, out_b = [], "closed", None
             else:
-                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si)
+                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si, near)
             pts = np.array(back[::-1] + [x0] + fwd)
             for idx in tree.query_ball_point(pts, 1.5 * h):
                 covered[idx] = True
