@@ -15,12 +15,19 @@ by the tubes of :mod:`singmesh.facets.tubes` from a
    a third equation), back at the start (a closed crease), or where the
    kink stops being active (the end placed by bisection); then every
    step divided by Newton, all at once.
+   A trace also ends where another active kink's crease meets it
+   (Gauss-Newton on the equations of both: an octahedron's vertex).
 3. Corners: ends of traces closer than ``CREASE_CORNER`` steps are one
    point (where three creases of a cube meet), placed by Gauss-Newton on
    the equations of all the creases there, and shared by them.
+4. Ends on the box of two creases a few cells apart (a corner just
+   outside the box) are joined in the graph by the surface's trace on
+   that face, so that the tubes' strips reach the piece between them.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import networkx as nx
 import numpy as np
@@ -477,8 +484,6 @@ def merge_curve_sets(a: CurveSet, b: CurveSet) -> CurveSet:
     n = len(a.points)
     wa = a.wide if len(a.wide) == len(a.edges) else np.zeros(len(a.edges), bool)
     wb = b.wide if len(b.wide) == len(b.edges) else np.zeros(len(b.edges), bool)
-    from dataclasses import replace
-
     return CurveSet(points=np.vstack([a.points, b.points]), edges=np.vstack([a.edges, b.edges + n]),
                     pieces=list(a.pieces) + [replace(c, vertices=c.vertices + n,
                                                               ends=tuple(e + len(a.special) if e >= 0 else -1

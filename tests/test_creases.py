@@ -199,6 +199,7 @@ def _check_mesh(m, eq, box, closed):
     # The mesh lists its creases, each edge with two triangles.
     assert m.singular_curves and all(c.type == "crease" for c in m.singular_curves)
     assert m.curve_edges_short_of_sheets() == 0
+    assert len(m.curve_lines()[1]) == 0  # no curve edge without triangles
 
 
 def test_polynomial_has_no_creases():
