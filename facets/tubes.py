@@ -333,8 +333,14 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
 
     for events, closed in rail_list:
         r = event_points[events]
-        _, snap = tree.query(r)
+        dist, snap = tree.query(r)
         if steady is not None:
+            if closed and len(events) > 2:
+                # A closed rail starts where it is nearest the curve (along
+                # a crease, not at the turn around a corner of creases,
+                # whose zigzag across the wedge the held snaps must see).
+                k0 = int(np.argmin(dist))
+                events, r, snap = np.roll(events, -k0), np.roll(r, -k0, axis=0), np.roll(snap, -k0)
             snap = _steady_snaps(snap, steady, g)
         m = len(events)
         steps = m if closed else m - 1
@@ -392,23 +398,26 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
 
 
 def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph) -> np.ndarray:
-    """The rail's snaps with steps back onto the last one or two curve vertices left passed (on ``steady`` vertices)."""
+    """The rail's snaps, with a step whose walk would start back along the last one held (``steady`` vertices).
+
+    Along a crease a rail never walks back over the curve edges it just
+    zipped: such a step is a zigzag of the rail (across the lattice, or
+    across the bisector of the wedge at a corner of creases), not a turn.
+    """
     snap = np.array(snap)
-    trail: list[int] = [int(snap[0])]
+    cur, came_from = int(snap[0]), -1
     for i in range(1, len(snap)):
         s = int(snap[i])
-        cur = trail[-1]
-        if s != cur and steady[s] and steady[cur] and s in trail[-3:-1]:
-            # Back onto a vertex just left: a zigzag of the rail, not a turn.
+        if s == cur:
+            continue
+        try:
+            path = nx.shortest_path(g, cur, s, weight="weight")
+        except nx.NetworkXNoPath:
+            path = [cur, s]
+        if steady[s] and steady[cur] and path[1] == came_from:
             snap[i] = cur
             continue
-        if s != cur:
-            # The curve vertices the strip walks over to reach s count as left.
-            try:
-                path = nx.shortest_path(g, cur, s, weight="weight")
-            except nx.NetworkXNoPath:
-                path = [cur, s]
-            trail = (trail + [int(v) for v in path[1:]])[-3:]
+        cur, came_from = s, int(path[-2])
     return snap
 
 

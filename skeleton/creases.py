@@ -134,8 +134,8 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, ne
 
     Another kink whose two functions both come within two steps of y (to
     first order) is tried: Gauss-Newton on the equations of both from y;
-    its point counts when it lies on the step from x to y and the other
-    kink is active there (an octahedron's vertex, where the Abs creases
+    its point counts when it lies on the step from x to y or within a
+    step beyond, and the other kink is active there (an octahedron's vertex, where the Abs creases
     x = 0 and y = 0 cross, or a cube's corner).
     """
     d = float(np.linalg.norm(y - x))
@@ -146,7 +146,9 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, ne
         if not np.all(np.abs(v[0]) <= 2.0 * h * np.linalg.norm(g[0], axis=1)):
             continue
         z = _corner(systems, [si, sj], y, h)
-        if z is None or np.linalg.norm(z - x) > 1.05 * d or np.dot(z - x, y - x) <= 0:
+        # On the step, or within a step beyond it (the next step would
+        # pass the corner, where Newton on this crease alone may fail).
+        if z is None or np.linalg.norm(z - x) > d + h or np.dot(z - x, y - x) <= 0:
             continue
         if other.active(z[None])[0]:
             return z
@@ -173,6 +175,14 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
                 y = z[0]
                 break
         if y is None:
+            # Newton fails past a point where another crease meets this one.
+            z = _crossing(systems, si, x, x + h * t, h, near) if systems is not None and len(systems) > 1 else None
+            if z is not None:
+                if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts[-1] = z  # x was Newton's landing next to (or on) the corner
+                else:
+                    pts.append(z)
+                return pts[1:], "meet", None
             return pts[1:], "lost", None
         if not np.all((y >= box[:, 0]) & (y <= box[:, 1])):
             c = _clip(system, box, x, y, h)
@@ -186,10 +196,11 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
         if systems is not None and len(systems) > 1:
             z = _crossing(systems, si, x, y, h, near)
             if z is not None:
-                if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
-                    pts[-1] = z
-                else:
-                    pts.append(z)
+                if np.linalg.norm(z - x) > np.linalg.norm(y - x) and np.linalg.norm(z - y) >= tol.CURVE_MERGE * h:
+                    pts.append(y)  # the meeting point lies beyond y
+                elif np.linalg.norm(z - pts[-1]) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts.pop()
+                pts.append(z)
                 return pts[1:], "meet", None
         if not system.active(y[None])[0]:
             return pts[1:], "end", y
@@ -256,7 +267,10 @@ def _densify(systems: list, lines: list, pieces: int) -> list:
         j = np.arange(pieces) / pieces
         grid = a[:, None, :] + j[None, :, None] * (b - a)[:, None, :]
         inner = grid[:, 1:].reshape(-1, 3)
-        reach = float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
+        # A point Newton moves by more than half its spacing is left out:
+        # next to a corner where the crease itself bends (an octahedron's
+        # vertex) it would land on the corner.
+        reach = np.repeat(0.5 * np.linalg.norm(b - a, axis=1) / pieces, pieces - 1)
         z, ok = _newton(systems[s], inner, reach)
         grid[:, 1:] = z.reshape(len(a), pieces - 1, 3)
         good = np.ones((len(a), pieces), bool)
@@ -266,6 +280,23 @@ def _densify(systems: list, lines: list, pieces: int) -> list:
             dense = np.vstack([dense, p[-1:]])
         out.append((s, dense, closed, ends))
     return out
+
+
+def _no_repeats(pts: np.ndarray, h: float) -> np.ndarray:
+    """The polyline without vertices that repeat their neighbour (a sample on a corner, and the
+    corner placed again by the trace from it); its ends are kept."""
+    if len(pts) < 2:
+        return pts
+    same = np.linalg.norm(np.diff(pts, axis=0), axis=1) < 1e-6 * h
+    drop = np.zeros(len(pts), bool)
+    n = len(pts)
+    for i in np.nonzero(same)[0].tolist():
+        # Of vertices i and i + 1, the one that is not an end goes.
+        if i + 1 < n - 1:
+            drop[i + 1] = True
+        elif i > 0:
+            drop[i] = True
+    return pts[~drop]
 
 
 def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | None = None) -> list:
@@ -303,7 +334,7 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
                 back, how_b, out_b = [], "closed", None
             else:
                 back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si, near)
-            pts = np.array(back[::-1] + [x0] + fwd)
+            pts = _no_repeats(np.array(back[::-1] + [x0] + fwd), h)
             for idx in tree.query_ball_point(pts, 1.5 * h):
                 covered[idx] = True
             covered[i] = True
@@ -428,20 +459,21 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     E = np.concatenate(edges).reshape(-1, 2)
     remap = np.arange(len(P))
     special: dict[int, str] = {}
-    ends = [v for v, _, how in end_vertex if how in ("end", "meet")]
+    ends = [v for v, _, how in end_vertex if how in ("end", "meet", "lost")]
     if ends:
         g = nx.Graph()
         g.add_nodes_from(ends)
         close = cKDTree(P[ends]).query_pairs(tol.CREASE_CORNER * h, output_type="ndarray")
         g.add_edges_from([(ends[i], ends[j]) for i, j in close.tolist()])
         line_of = {v: k for v, k, _ in end_vertex}
+        how_of = {v: how for v, _, how in end_vertex}
         for comp in sorted(nx.connected_components(g), key=min):
             comp = sorted(comp)
             which = sorted({lines[line_of[v]][0] for v in comp})
             x = _corner(systems, which, P[comp].mean(axis=0), h) if len(comp) > 1 else None
             if x is None:
                 for v in comp:
-                    special[v] = "end of a crease"
+                    special[v] = "end of the trace" if how_of[v] == "lost" else "end of a crease"
                 continue
             P[comp[0]] = x
             remap[comp] = comp[0]
@@ -449,7 +481,7 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     for v, _, how in end_vertex:
         if how == "box":
             special[v] = "end on the box"
-        elif how == "lost":
+        elif how == "lost" and v not in special and remap[v] == v:
             special[v] = "end of the trace"
     E = remap[E]
     E = E[E[:, 0] != E[:, 1]]

@@ -70,6 +70,9 @@ CASES = [
     ("half-ball-rotated", f"Max({SPH}, {_lin(N)})", 1.5, True, [(SPH, _lin(N))], 1.0, None),
     # Creases on split planes of the symmetric box: z = 0 and x = 0.
     ("octahedron", "Abs(x) + Abs(y) + Abs(z) - 1", 1.3, True, OCTA_PAIRS, np.inf, OCTA_CORNERS),
+    ("octahedron-rotated", "Abs({}) + Abs({}) + Abs({}) - 1".format(*(_lin(r) for r in R)), 1.3, True,
+     [(_lin(R[i]), f"{s}{_lin(R[j])}{t}{_lin(R[k])}-1") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
+      for s in ("", "-") for t in ("+", "-")], np.inf, np.linalg.solve(R, OCTA_CORNERS.T).T),
     ("upper-half-ball", f"Max({SPH}, -z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("min-on-x0", f"Min({SPH}, x)", 1.5, False, [(SPH, "x")], 1.0, None),
 ]
