@@ -370,6 +370,37 @@ class Graph:
                 return None
         return terms if len(terms) >= 2 else None
 
+    def substitute(self, root: int, old: int, new: int) -> int:
+        """The node of ``root`` with node ``old`` replaced by node ``new``.
+
+        Used for the pieces of a kink (a Max with one of its arguments in
+        its place): the nodes that do not reach ``old`` are shared.
+        """
+        done: dict = {old: new}
+        for n in self.plan([root]):
+            if n in done:
+                continue
+            args = self.args[n]
+            new_args = tuple(done.get(a, a) for a in args)
+            if new_args == args:
+                done[n] = n
+                continue
+            op, p = self.ops[n], self.params[n]
+            if op == "add":
+                done[n] = self.add(*new_args)
+            elif op == "mul":
+                done[n] = self.mul(*new_args)
+            elif op == "neg":
+                done[n] = self.neg(new_args[0])
+            elif op == "powi":
+                done[n] = self.powi(new_args[0], p)
+            elif op in ("max", "min"):
+                uniq = tuple(sorted(set(new_args)))
+                done[n] = uniq[0] if len(uniq) == 1 else self.node(op, uniq)
+            else:
+                done[n] = self.node(op, new_args, p)
+        return done[root]
+
     def plan(self, outputs) -> list[int]:
         """Nodes needed for ``outputs``, in evaluation order."""
         need = set()

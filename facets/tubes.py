@@ -103,9 +103,15 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
         radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
         keep_off = (radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL) * cell
         far = cKDTree(curves.points[on_box]).query(events.point, distance_upper_bound=keep_off)[0] > keep_off
+    # Along creases the rails' snaps never step back (see strip_triangles).
+    steady = np.zeros(len(curves.points), bool)
+    for c in curves.pieces:
+        if c.type == "crease":
+            steady[np.asarray(c.vertices)] = True
     return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
-                           reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box)
+                           reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
+                           steady=steady if steady.any() else None)
 
 
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
@@ -286,7 +292,7 @@ def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = No
 
 def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray, curve_points: np.ndarray,
                     curve_edges: np.ndarray, curve_keys: np.ndarray, box_ends: np.ndarray, reach: float,
-                    box: np.ndarray | None = None):
+                    box: np.ndarray | None = None, steady: np.ndarray | None = None):
     """Triangles zipping each rail to the curve.
 
     Parameters
@@ -300,6 +306,12 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         this far away.
     box : (3, 2) ndarray, optional
         The domain: only rail ends on its boundary are joined so.
+    steady : (c,) bool, optional
+        Curve vertices (of creases) at which a rail's snap never steps
+        back onto the one or two vertices it just came from: a rail some
+        cells off a curve in general position zigzags across the lattice,
+        and its nearest curve vertex with it, which would zip one curve
+        edge from one side twice.
 
     Returns
     -------
@@ -331,7 +343,15 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
 
     for events, closed in rail_list:
         r = event_points[events]
-        _, snap = tree.query(r)
+        dist, snap = tree.query(r)
+        if steady is not None:
+            if closed and len(events) > 2:
+                # A closed rail starts where it is nearest the curve (along
+                # a crease, not at the turn around a corner of creases,
+                # whose zigzag across the wedge the held snaps must see).
+                k0 = int(np.argmin(dist))
+                events, r, snap = np.roll(events, -k0), np.roll(r, -k0, axis=0), np.roll(snap, -k0)
+            snap = _steady_snaps(snap, steady, g)
         m = len(events)
         steps = m if closed else m - 1
         for i in range(steps):
@@ -385,6 +405,30 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     # made twice is kept once; one whose corners coincide is dropped.
     good = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2]) & (keys[:, 0] != keys[:, 2])
     return keys[good], pts[good]
+
+
+def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph) -> np.ndarray:
+    """The rail's snaps, with a step whose walk would start back along the last one held (``steady`` vertices).
+
+    Along a crease a rail never walks back over the curve edges it just
+    zipped: such a step is a zigzag of the rail (across the lattice, or
+    across the bisector of the wedge at a corner of creases), not a turn.
+    """
+    snap = np.array(snap)
+    cur, came_from = int(snap[0]), -1
+    for i in range(1, len(snap)):
+        s = int(snap[i])
+        if s == cur:
+            continue
+        try:
+            path = nx.shortest_path(g, cur, s, weight="weight")
+        except nx.NetworkXNoPath:
+            path = [cur, s]
+        if steady[s] and steady[cur] and path[1] == came_from:
+            snap[i] = cur
+            continue
+        cur, came_from = s, int(path[-2])
+    return snap
 
 
 def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach: float, box: np.ndarray):

@@ -17,6 +17,7 @@ from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
+from singmesh.skeleton.creases import crease_curves, merge_curve_sets
 from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -118,6 +119,11 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
     t_curves = time.perf_counter()
     curves = singular_curves(surf, b, step=float(cell.max()))
+    locus_curves = bool(len(curves.points))
+    # Creases (kinks of F on the surface) are meshed as the singular
+    # curves are: tubes with two half-sheets along them.
+    creases = crease_curves(surf, b, step=float(cell.max()))
+    curves = merge_curve_sets(curves, creases)
     t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
     # Points on the curves are their special points (pinch and triple
@@ -199,7 +205,8 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "inconsistent_squares": int(links.inconsistent.sum()),
         "singular_search_time": t_sing,
         "curve_time": t_curves,
-        "singular_locus_not_isolated": bool(overflow or len(curves.points)),
+        "singular_locus_not_isolated": bool(overflow or locus_curves),
+        "creases": len(creases),
         "untraced_curve": bool(overflow),
         "repeated_factors": repeated,
         "overlapping_stars": len(clashes),

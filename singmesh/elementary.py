@@ -47,7 +47,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
-from singmesh.surface import Surface
+from singmesh.surface import CreaseSystem, Surface
 from singmesh.syntax import VARIABLES, read_equation
 
 _EPS = float(np.finfo(float).eps)
@@ -489,6 +489,36 @@ class ElementarySurface(Surface):
             keep[idx] = (flo <= slack) & (fhi >= -slack)
         return keep
 
+    # ------------------------------------------------------------ kinks
+    def crease_systems(self) -> list[CreaseSystem]:
+        """The kinks of F as pairs of smooth functions whose common zeros hold the creases.
+
+        A Max or Min node with arguments a_1 ... a_k gives, for each pair
+        i < j, G1 = F with the node replaced by a_i and G2 = a_i - a_j;
+        an Abs node of a: G1 = F with the node replaced by a, G2 = a; an
+        R-function f + g +- sqrt(f^2 + g^2): G1 = f, G2 = g.
+        """
+        if getattr(self, "_crease_systems", None) is None:
+            g, f = self._graph, self._f
+            out = []
+            for k in self._kinks:
+                op, args = g.ops[k], g.args[k]
+                if op == "abs":
+                    a = args[0]
+                    out.append(_Kink(self, "Abs crease", g.substitute(f, k, a), a,
+                                     g.substitute(f, k, g.neg(a)), (), op))
+                    continue
+                for i, j in itertools.combinations(range(len(args)), 2):
+                    others = tuple(args[m] for m in range(len(args)) if m not in (i, j))
+                    out.append(_Kink(self, f"{op} crease of arguments {i}, {j}", g.substitute(f, k, args[i]),
+                                     g.sub(args[i], args[j]), g.substitute(f, k, args[j]),
+                                     (args[i],) + others, op))
+            for k in self._creases:
+                fa, ga = g.args[k][:2]
+                out.append(_Kink(self, "R-function crease", fa, ga, None, (), "rfun"))
+            self._crease_systems = out
+        return self._crease_systems
+
     def undefined_on(self, data: np.ndarray):
         """A subexpression of F undefined somewhere on one of the boxes, or None.
 
@@ -707,3 +737,55 @@ class ElementarySurface(Surface):
             with np.errstate(invalid="ignore"):
                 good &= np.abs(fv) <= np.fmax(np.abs(fl), np.abs(fr))
         return x, good
+
+
+class _Kink(CreaseSystem):
+    """A kink of an :class:`ElementarySurface`: G1, G2 as nodes of its graph.
+
+    ``other`` is the node of F with the kink's other piece (None for an
+    R-function); ``tie`` the tied argument then the others of a Max/Min.
+    """
+
+    def __init__(self, surface: ElementarySurface, name: str, g1: int, g2: int, other, tie: tuple, op: str):
+        self.name = name
+        self._s = surface
+        g = surface._graph
+        self._nodes = [g1, g2] + [g.diff(n, a) for n in (g1, g2) for a in range(3)]
+        self._other = None if other is None else [g.diff(g1, a) for a in range(3)] + [g.diff(other, a)
+                                                                                    for a in range(3)]
+        self._tie = tie
+        self._op = op
+        self._g1, self._g2 = g1, g2
+
+    def values(self, points):
+        p = np.asarray(points, float).reshape(-1, 3)
+        v = point_eval(self._s._graph, self._nodes, p)
+        return np.stack(v[:2], 1), np.stack([np.stack(v[2:5], 1), np.stack(v[5:8], 1)], 1)
+
+    def active(self, points):
+        p = np.asarray(points, float).reshape(-1, 3)
+        g = self._s._graph
+        (fv,), (fm,) = point_eval(g, [self._s._f], p, magnitude=True)
+        # On the crease F = G1 (the tie): F at rounding level of its terms.
+        ok = np.abs(fv) <= tol.CREASE_RESIDUAL * np.maximum(fm, 1e-300)
+        if self._tie:
+            vals = point_eval(g, list(self._tie), p, magnitude=True)
+            a, ma = vals[0][0], vals[1][0]
+            for b, mb in zip(vals[0][1:], vals[1][1:]):
+                slack = tol.CREASE_TIE * (ma + mb)
+                ok &= (a >= b - slack) if self._op == "max" else (a <= b + slack)
+        if self._other is not None:
+            d = np.stack(point_eval(g, self._other, p), 1)
+            gi, gj = d[:, :3], d[:, 3:]
+            jump = np.linalg.norm(gi - gj, axis=1)
+            ok &= jump > tol.CREASE_JUMP * (np.linalg.norm(gi, axis=1) + np.linalg.norm(gj, axis=1))
+        return ok & np.isfinite(fv)
+
+    def may_vanish(self, data):
+        lo, hi = self._s.corners(data)
+        r = interval_eval(self._s._graph, [self._g1, self._g2], lo, hi)
+        keep = np.ones(len(lo), bool)
+        for gl, gh in zip(r.lo, r.hi):
+            s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+            keep &= ~((gl > s) | (gh < -s))  # NaN (outside the domain): kept
+        return keep

@@ -56,10 +56,13 @@ class Mesh:
         The two derivatives vanishing at each skeleton node.
     singular_curves : list of :class:`singmesh.skeleton.singular_curves.SingularCurve`
         The curves of singular points, one record per piece of one
-        transversal type (polyline, type, sheets, end points, mesh vertices).
+        transversal type (polyline, type, sheets, end points, mesh vertices),
+        and the creases of a non-polynomial F (type ``"crease"``: where its
+        Min/Max, Abs or R-function has a kink on the surface, two half-sheets
+        at an angle), each edge a mesh edge.
     special_points : list of :class:`singmesh.skeleton.singular_curves.SpecialPoint`
         Pinch points, triple points, crossings, changes of type and ends on
-        the box of the curves, each a mesh vertex.
+        the box of the curves, corners of creases, each a mesh vertex.
     curve_graph : ((c, 3) float64, (e, 2) int64, (c,) int64)
         All curves as one graph: its points, its edges (pairs of points)
         and the mesh vertex at each point (-1 where no triangle has it:
@@ -123,6 +126,7 @@ class Mesh:
             "min_angle": float(angles.min()) if len(angles) else float("nan"),
             "singular_points": len(self.singularities),
             "singular_curves": len(self.singular_curves),
+            "creases": sum(c.type == "crease" for c in self.singular_curves),
             "special_points": len(self.special_points),
             "line_cells": int(len(self.curve_lines()[1])),
         }
@@ -148,9 +152,18 @@ class Mesh:
         for s in self.singularities:
             lines.append("  " + (s.describe() if hasattr(s, "describe") else str(s)))
         if self.singular_curves:
-            lines.append(f"singular curves      {r['singular_curves']} (line cells {r['line_cells']})")
-            for c in self.singular_curves:
-                lines.append("  " + c.describe())
+            # Creases (kinks of F on the surface) are meshed as the curves
+            # of singular points are, and listed apart.
+            locus = [c for c in self.singular_curves if c.type != "crease"]
+            creases = [c for c in self.singular_curves if c.type == "crease"]
+            if locus:
+                lines.append(f"singular curves      {len(locus)} (line cells {r['line_cells']})")
+                for c in locus:
+                    lines.append("  " + c.describe())
+            if creases:
+                lines.append(f"creases              {len(creases)}")
+                for c in creases:
+                    lines.append("  " + c.describe())
             lines.append(f"special points       {r['special_points']}")
             for sp in self.special_points:
                 lines.append("  " + sp.describe())

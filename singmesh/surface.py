@@ -43,6 +43,37 @@ from .tolerances import CANDIDATE_DUST, MAX_DEGREE, ZERO_ULPS
 CHILD_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
 
 
+class CreaseSystem(abc.ABC):
+    """One kind of kink of F: where two smooth functions G1, G2 both vanish.
+
+    A crease of the surface is a curve where F = 0 has a kink (the
+    intersection of the two pieces of a Max or Min, the zero of an Abs's
+    argument, the crease f = g = 0 of an R-function): the common zeros of
+    G1 and G2 hold it, and :meth:`active` says where on them F really has
+    a kink on its zero set.  Smooth near the crease, so Newton on (G1, G2)
+    converges quadratically onto it.
+
+    Attributes
+    ----------
+    name : str
+        What the kink is, for messages (e.g. ``"Max(z, x**2 ...): 0 = 1"``).
+    """
+
+    name: str = ""
+
+    @abc.abstractmethod
+    def values(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """G1, G2 and their gradients at ``points`` (n, 3): (n, 2) and (n, 2, 3)."""
+
+    @abc.abstractmethod
+    def active(self, points) -> np.ndarray:
+        """(n,) bool: at these points (on the common zeros of G1, G2), F = 0 has a kink."""
+
+    @abc.abstractmethod
+    def may_vanish(self, data: np.ndarray) -> np.ndarray:
+        """(N,) bool on a stack of boxes (the surface's ``data``): G1 and G2 may both vanish there."""
+
+
 class Surface(abc.ABC):
     """What the stages know of a surface F(x, y, z) = 0 (issue #10's contract).
 
@@ -229,6 +260,11 @@ class Surface(abc.ABC):
         Never False on a box holding a singular point (of the boxes below
         the last :meth:`enclose`).
         """
+
+    # ------------------------------------------------------------ kinks
+    def crease_systems(self) -> list[CreaseSystem]:
+        """The kinks of F that may make creases on the surface (none for a smooth F)."""
+        return []
 
     # ------------------------------------------------------------ on lines
     @abc.abstractmethod

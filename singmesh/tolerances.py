@@ -396,3 +396,41 @@ ELEMENTARY_ROOT_STEPS = 100
 #: of the kinks (Abs, Min, Max) straddling a box, up to this many; a box
 #: with more passes untested (never dropped).
 KINK_COMBINATIONS = 64
+
+#: Creases (kinks of F on its zero set, skeleton/creases.py).  Depth of
+#: the search for boxes where both functions of a kink may vanish (as the
+#: singular curves' samples: level 6 boxes are a few fine cells wide).
+CREASE_LEVEL = 6
+
+#: A point is on a crease when |G1| and |G2| are below this times the
+#: size of their gradients times the point's scale (Newton reaches
+#: ~1e-16; a start in a valley that stalls is far above).
+CREASE_RESIDUAL = 1e-11
+
+#: F's gradient jumps across an active kink: the two pieces' gradients
+#: differ by more than this fraction of their size (where an enclosing
+#: Max picks another argument, both pieces give the same gradient).
+CREASE_JUMP = 1e-6
+
+#: A tie of a Max/Min is on top when no third argument exceeds it by more
+#: than this times the arguments' size (a corner where three tie is
+#: still active, to rounding).
+CREASE_TIE = 1e-12
+
+#: Creases are traced with this many fine cells per step, then each step
+#: is divided by Newton (as CURVE_TRACE_STEP for singular curves).
+CREASE_TRACE_STEP = 4
+
+#: Newton iterations onto a crease (min-norm steps on two equations, or
+#: Gauss-Newton on the stacked equations at a corner).
+CREASE_NEWTON = 30
+
+#: Ends of crease traces (where a kink stops being active) closer than
+#: this many trace steps are one corner, placed by Gauss-Newton on the
+#: equations of all the creases meeting there.
+CREASE_CORNER = 1.5
+
+#: Ends on the box of two creases closer than this many fine cells are
+#: joined along the surface's trace on the box face (twice the tubes'
+#: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
+CREASE_BOX_JOIN = 12.0

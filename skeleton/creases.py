@@ -1,0 +1,525 @@
+"""Creases: curves where F = 0 has a kink, found and traced as singular curves are.
+
+Each kink of F (:meth:`Surface.crease_systems`: a Max/Min's tie, an Abs's
+zero, an R-function's f = g = 0) is the common zero set of two smooth
+functions G1, G2.  On it the surface is two half-sheets meeting at an
+angle: like a cuspidal edge, a curve with two triangles per edge, meshed
+by the tubes of :mod:`singmesh.facets.tubes` from a
+:class:`~singmesh.skeleton.singular_curves.CurveSet` of type ``"crease"``.
+
+1. Samples: minimum-norm Newton on (G1, G2) from the centres of the boxes
+   where both may vanish (interval bounds), kept where the kink is active.
+2. Tracing: predictor along grad G1 x grad G2, corrector Newton, steps of
+   ``CREASE_TRACE_STEP`` fine cells, both ways from an uncovered sample,
+   until the box (the end placed on it by Newton with the face's plane as
+   a third equation), back at the start (a closed crease), or where the
+   kink stops being active (the end placed by bisection); then every
+   step divided by Newton, all at once.
+   A trace also ends where another active kink's crease meets it
+   (Gauss-Newton on the equations of both: an octahedron's vertex).
+3. Corners: ends of traces closer than ``CREASE_CORNER`` steps are one
+   point (where three creases of a cube meet), placed by Gauss-Newton on
+   the equations of all the creases there, and shared by them.
+4. Ends on the box of two creases a few cells apart (a corner just
+   outside the box) are joined in the graph by the surface's trace on
+   that face, so that the tubes' strips reach the piece between them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import networkx as nx
+import numpy as np
+from scipy.spatial import cKDTree
+
+from singmesh import tolerances as tol
+from singmesh.surface import CHILD_OFFSETS, CreaseSystem, Surface
+
+from .singular_curves import CurveSet, SingularCurve, SpecialPoint
+
+#: The type of a crease's pieces in :class:`CurveSet`.
+CREASE = "crease"
+_EPS = float(np.finfo(float).eps)
+
+
+# ---------------------------------------------------------------- Newton
+def _newton(system: CreaseSystem, x: np.ndarray, reach, extra=None):
+    """Minimum-norm Newton from points x (k, 3) onto G1 = G2 = 0 (and ``extra``).
+
+    ``extra``: optional (k, 4) rows (normal n, offset c) of a third
+    equation n . x = c (a face of the box).  ``reach``: a point that moves
+    further is refused.  Returns (points, ok).
+    """
+    x0 = np.array(x, float).reshape(-1, 3)
+    x = x0.copy()
+    with np.errstate(all="ignore"):
+        for _ in range(tol.CREASE_NEWTON):
+            v, g = system.values(x)
+            if extra is not None:
+                v = np.concatenate([v, (np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3])[:, None]], 1)
+                g = np.concatenate([g, extra[:, None, :3]], 1)
+            # A point outside a piece's domain (|x|^2.5 with x < 0 once the
+            # Abs is replaced by x) stays where it is, and is refused below.
+            bad = ~(np.isfinite(v).all(axis=1) & np.isfinite(g).all(axis=(1, 2)))
+            if bad.any():
+                v, g = np.where(bad[:, None], 0.0, v), np.where(bad[:, None, None], 0.0, g)
+            step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
+            step = np.where(np.isfinite(step), step, 0.0)
+            x_new = x - step
+            # Converged everywhere: steps at rounding level of the points.
+            small = np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0))
+            x = x_new
+            if small:
+                break
+        v, g = system.values(x)
+        size = np.linalg.norm(g, axis=2) * np.maximum(np.abs(x).max(axis=1), 1.0)[:, None]
+        ok = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)
+        if extra is not None:
+            ok &= np.abs(np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3]) <= 1e-12 * np.abs(x).max(axis=1).clip(1)
+        ok &= np.isfinite(x).all(axis=1) & (np.linalg.norm(x - x0, axis=1) <= reach)
+    return x, ok
+
+
+def _tangent(system: CreaseSystem, x: np.ndarray) -> np.ndarray:
+    """Unit tangents (k, 3) of the crease at points x: grad G1 x grad G2."""
+    _, g = system.values(np.asarray(x, float).reshape(-1, 3))
+    t = np.cross(g[:, 0], g[:, 1])
+    return t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+
+
+# ---------------------------------------------------------------- samples
+def crease_samples(surface: Surface, system: CreaseSystem, box: np.ndarray, level: int) -> np.ndarray:
+    """Points of the active crease near the boxes at ``level`` where G1, G2 and F may vanish."""
+    data = surface.enclose(box)
+    corner = np.zeros((1, 3), np.int64)
+    for _ in range(level):
+        children = surface.split(data)
+        data = children.reshape((-1,) + children.shape[2:])
+        corner = (2 * corner[:, None, :] + CHILD_OFFSETS[None]).reshape(-1, 3)
+        keep = system.may_vanish(data) & ~surface.excludes_zero(data)
+        data, corner = data[keep], corner[keep]
+        if len(corner) == 0:
+            return np.zeros((0, 3))
+    size = (box[:, 1] - box[:, 0]) / (1 << level)
+    start = box[:, 0] + (corner + 0.5) * size
+    x, ok = _newton(system, start, 2.0 * float(size.max()))
+    ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
+    x = x[ok]
+    return x[system.active(x)] if len(x) else x
+
+
+# ---------------------------------------------------------------- tracing
+def _clip(system: CreaseSystem, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: float):
+    """The point of the crease on the box's boundary between x (inside) and y (outside), or None."""
+    d = y - x
+    with np.errstate(all="ignore"):
+        s = np.minimum(np.where(d < 0, (box[:, 0] - x) / d, np.inf), np.where(d > 0, (box[:, 1] - x) / d, np.inf))
+    axis = int(np.argmin(s))
+    value = box[axis, 0] if d[axis] < 0 else box[axis, 1]
+    q = x + min(float(s[axis]), 1.0) * d
+    extra = np.zeros((1, 4))
+    extra[0, axis] = 1.0
+    extra[0, 3] = value
+    z, ok = _newton(system, q[None], 2.0 * h, extra)
+    if not ok[0]:
+        return None
+    z = z[0]
+    z[axis] = value
+    return np.clip(z, box[:, 0], box[:, 1])
+
+
+def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, near=None):
+    """Where another crease meets crease ``si`` between its points x and y, or None.
+
+    Another kink whose two functions both come within two steps of y (to
+    first order) is tried: Gauss-Newton on the equations of both from y;
+    its point counts when it lies on the step from x to y or within a
+    step beyond, and the other kink is active there (an octahedron's vertex, where the Abs creases
+    x = 0 and y = 0 cross, or a cube's corner).
+    """
+    d = float(np.linalg.norm(y - x))
+    for sj, other in enumerate(systems):
+        if sj == si or (near is not None and not near(sj, y)):
+            continue
+        v, g = other.values(y[None])
+        if not np.all(np.abs(v[0]) <= 2.0 * h * np.linalg.norm(g[0], axis=1)):
+            continue
+        z = _corner(systems, [si, sj], y, h)
+        # On the step, or within a step beyond it (the next step would
+        # pass the corner, where Newton on this crease alone may fail).
+        if z is None or np.linalg.norm(z - x) > d + h or np.dot(z - x, y - x) <= 0:
+            continue
+        if other.active(z[None])[0]:
+            return z
+    return None
+
+
+def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float,
+                   max_steps: int, systems: list | None = None, si: int = 0, near=None):
+    """Vertices from x0 along t0 (x0 excluded) and how the trace ended.
+
+    ``"box"``: the last vertex is on the box's boundary; ``"closed"``: back
+    at x0; ``"end"``: the kink stops being active between the last vertex
+    and the point returned as third item; ``"meet"``: the last vertex is
+    where another crease (of ``systems``) meets it; ``"lost"``: Newton lost it.
+    """
+    pts = [x0]
+    t = t0
+    for n in range(max_steps):
+        x = pts[-1]
+        y = None
+        for scale in (1.0, 0.5, 0.25):
+            z, ok = _newton(system, (x + scale * h * t)[None], scale * h)
+            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
+                y = z[0]
+                break
+        if y is None:
+            # Newton fails past a point where another crease meets this one.
+            z = _crossing(systems, si, x, x + h * t, h, near) if systems is not None and len(systems) > 1 else None
+            if z is not None:
+                if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts[-1] = z  # x was Newton's landing next to (or on) the corner
+                else:
+                    pts.append(z)
+                return pts[1:], "meet", None
+            return pts[1:], "lost", None
+        if not np.all((y >= box[:, 0]) & (y <= box[:, 1])):
+            c = _clip(system, box, x, y, h)
+            if c is not None:
+                if np.linalg.norm(c - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts[-1] = c
+                else:
+                    pts.append(c)
+                return pts[1:], "box", None
+            return pts[1:], "lost", None
+        if systems is not None and len(systems) > 1:
+            z = _crossing(systems, si, x, y, h, near)
+            if z is not None:
+                if np.linalg.norm(z - x) > np.linalg.norm(y - x) and np.linalg.norm(z - y) >= tol.CURVE_MERGE * h:
+                    pts.append(y)  # the meeting point lies beyond y
+                elif np.linalg.norm(z - pts[-1]) < tol.CURVE_MERGE * h and len(pts) > 1:
+                    pts.pop()
+                pts.append(z)
+                return pts[1:], "meet", None
+        if not system.active(y[None])[0]:
+            return pts[1:], "end", y
+        if n > 2 and np.linalg.norm(y - x0) < 0.75 * h:
+            return pts[1:], "closed", None
+        t_new = _tangent(system, y)[0]
+        t = t_new if np.dot(t_new, y - x) >= 0 else -t_new
+        pts.append(y)
+    return pts[1:], "lost", None
+
+
+def _ends(system_of: list, systems: list, inside: np.ndarray, outside: np.ndarray, h: float) -> np.ndarray:
+    """Where each kink stops being active between inside[i] (active) and outside[i]: bisection, all at once."""
+    k = len(inside)
+    a, b = inside.copy(), outside.copy()
+    if k == 0:
+        return a
+    for _ in range(60):
+        if np.all(np.linalg.norm(b - a, axis=1) <= 1e-13 * h):
+            break
+        mid = 0.5 * (a + b)
+        act = np.zeros(k, bool)
+        for s in sorted(set(system_of)):
+            rows = np.nonzero(np.asarray(system_of) == s)[0]
+            z, ok = _newton(systems[s], mid[rows], h)
+            mid[rows] = np.where(ok[:, None], z, mid[rows])
+            act[rows] = systems[s].active(mid[rows]) & ok
+        a = np.where(act[:, None], mid, a)
+        b = np.where(act[:, None], b, mid)
+    return a
+
+
+def _corner(systems: list, which: list, start: np.ndarray, h: float):
+    """Gauss-Newton from ``start`` on the stacked equations of the creases ``which``: the point, or None."""
+    x = np.array(start, float)
+    with np.errstate(all="ignore"):
+        for _ in range(tol.CREASE_NEWTON):
+            vs, gs = zip(*(systems[s].values(x[None]) for s in which))
+            v = np.concatenate([a[0] for a in vs])
+            g = np.concatenate([a[0] for a in gs])
+            if not (np.isfinite(g).all() and np.isfinite(v).all()):
+                return None
+            step = np.linalg.lstsq(g, v, rcond=1e-13)[0]
+            x_new = x - step
+            small = np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0))
+            x = x_new
+            if small:
+                break
+        vs, gs = zip(*(systems[s].values(x[None]) for s in which))
+        v = np.concatenate([a[0] for a in vs])
+        size = np.linalg.norm(np.concatenate([a[0] for a in gs]), axis=1) * max(float(np.abs(x).max()), 1.0)
+    good = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300))
+    return x if good and np.linalg.norm(x - start) <= 2.0 * tol.CREASE_CORNER * h else None
+
+
+def _densify(systems: list, lines: list, pieces: int) -> list:
+    """Each step of each polyline divided into ``pieces`` by Newton from the chord, all at once per crease."""
+    if pieces <= 1:
+        return lines
+    out = []
+    for s, p, closed, ends in lines:
+        q = np.vstack([p, p[:1]]) if closed else p
+        a, b = q[:-1], q[1:]
+        j = np.arange(pieces) / pieces
+        grid = a[:, None, :] + j[None, :, None] * (b - a)[:, None, :]
+        inner = grid[:, 1:].reshape(-1, 3)
+        # A point Newton moves by more than half its spacing is left out:
+        # next to a corner where the crease itself bends (an octahedron's
+        # vertex) it would land on the corner.
+        reach = np.repeat(0.5 * np.linalg.norm(b - a, axis=1) / pieces, pieces - 1)
+        z, ok = _newton(systems[s], inner, reach)
+        grid[:, 1:] = z.reshape(len(a), pieces - 1, 3)
+        good = np.ones((len(a), pieces), bool)
+        good[:, 1:] = ok.reshape(len(a), pieces - 1)
+        dense = grid.reshape(-1, 3)[good.ravel()]
+        if not closed:
+            dense = np.vstack([dense, p[-1:]])
+        out.append((s, dense, closed, ends))
+    return out
+
+
+def _no_repeats(pts: np.ndarray, h: float) -> np.ndarray:
+    """The polyline without vertices that repeat their neighbour (a sample on a corner, and the
+    corner placed again by the trace from it); its ends are kept."""
+    if len(pts) < 2:
+        return pts
+    same = np.linalg.norm(np.diff(pts, axis=0), axis=1) < 1e-6 * h
+    drop = np.zeros(len(pts), bool)
+    n = len(pts)
+    for i in np.nonzero(same)[0].tolist():
+        # Of vertices i and i + 1, the one that is not an end goes.
+        if i + 1 < n - 1:
+            drop[i + 1] = True
+        elif i > 0:
+            drop[i] = True
+    return pts[~drop]
+
+
+def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | None = None) -> list:
+    """The creases as polylines: (system index, points, closed, (end kind, end kind)) each."""
+    box = np.asarray(box, float)
+    level = tol.CREASE_LEVEL if level is None else level
+    systems = surface.crease_systems()
+    h = tol.CREASE_TRACE_STEP * step
+    diameter = float(np.linalg.norm(box[:, 1] - box[:, 0]))
+    max_steps = int(8 * diameter / h) + 16
+    lines = []
+    found = [crease_samples(surface, system, box, level) for system in systems]
+    # Another kink's crease can only meet this one near its own samples
+    # (one per box of the search where it is active).
+    radius = 2.0 * h + float(np.linalg.norm(box[:, 1] - box[:, 0])) / (1 << level)
+    trees = [cKDTree(p) if len(p) else None for p in found]
+
+    def near(sj, y):
+        return trees[sj] is not None and trees[sj].query(y, distance_upper_bound=radius)[0] <= radius
+
+    for si, system in enumerate(systems):
+        samples = found[si]
+        if len(samples) == 0:
+            continue
+        samples = samples[np.lexsort(samples.T[::-1])]
+        tree = cKDTree(samples)
+        covered = np.zeros(len(samples), bool)
+        for i in range(len(samples)):
+            if covered[i]:
+                continue
+            x0 = samples[i]
+            t0 = _tangent(system, x0)[0]
+            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near)
+            if how_f == "closed":
+                back, how_b, out_b = [], "closed", None
+            else:
+                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si, near)
+            pts = _no_repeats(np.array(back[::-1] + [x0] + fwd), h)
+            for idx in tree.query_ball_point(pts, 1.5 * h):
+                covered[idx] = True
+            covered[i] = True
+            if len(pts) < 2:
+                continue
+            lines.append([si, pts, how_f == "closed", [how_b, how_f], [out_b, out_f]])
+    return systems, lines
+
+
+def crease_curves(surface: Surface, box, step: float, level: int | None = None) -> CurveSet:
+    """The creases of F = 0 in ``box`` as a :class:`CurveSet` of type ``"crease"``, vertices ``step`` apart.
+
+    Returns an empty CurveSet for a surface without kinks (every polynomial).
+    """
+    box = np.asarray(box, dtype=float)
+    if not surface.crease_systems():
+        return CurveSet()
+    systems, lines = trace_creases(surface, box, step, level)
+    if not lines:
+        return CurveSet()
+    h = tol.CREASE_TRACE_STEP * step
+    # Where a kink stops being active: its end, by bisection.
+    jobs = [(k, e) for k, line in enumerate(lines) for e in (0, 1) if line[3][e] == "end"]
+    if jobs:
+        inside = np.array([lines[k][1][0 if e == 0 else -1] for k, e in jobs])
+        outside = np.array([lines[k][4][e] for k, e in jobs])
+        placed = _ends([lines[k][0] for k, _ in jobs], systems, inside, outside, h)
+        for (k, e), x in zip(jobs, placed):
+            p = lines[k][1]
+            near = np.linalg.norm(x - (p[0] if e == 0 else p[-1])) < tol.CURVE_MERGE * h and len(p) > 2
+            if e == 0:
+                lines[k][1] = np.vstack([x[None], p[1:] if near else p])
+            else:
+                lines[k][1] = np.vstack([p[:-1] if near else p, x[None]])
+    lines = _densify(systems, [(s, p, c, tuple(how)) for s, p, c, how, _ in lines], tol.CREASE_TRACE_STEP)
+    return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
+
+
+def _join_on_box(surface: Surface, curves: CurveSet, box: np.ndarray, step: float) -> CurveSet:
+    """Ends on the box of two creases a few cells apart, joined by the surface's trace on that face.
+
+    Where a corner of creases lies just outside the box (a rotated cube
+    poking out of it), its creases end on one face of the box closer than
+    the tubes around them are wide: the piece of surface between them
+    there has no rail of its own, and the strips reach it only along the
+    curve graph.  The trace of that piece on the face (vertices ``step``
+    apart, on F = 0 and on the face) joins the two ends as graph edges
+    that belong to no crease.
+    """
+    ends = [(int(v), sp.point) for v, sp in zip(curves.special_vertex.tolist(), curves.special)
+            if sp.kind == "end on the box"]
+    if len(ends) < 2:
+        return curves
+    piece = np.full(len(curves.points), -1)
+    for i, c in enumerate(curves.pieces):
+        piece[np.asarray(c.vertices)] = i
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    reach = tol.CREASE_BOX_JOIN * step
+    new_pts, new_edges = [], []
+    n = len(curves.points)
+    for i in range(len(ends)):
+        for j in range(i + 1, len(ends)):
+            (a, pa), (b, pb) = ends[i], ends[j]
+            d = float(np.linalg.norm(pb - pa))
+            if piece[a] == piece[b] or d > reach:
+                continue
+            face = (np.abs(pa - box[:, 0]) <= 1e-9 * size) & (np.abs(pb - box[:, 0]) <= 1e-9 * size)
+            side = 0
+            if not face.any():
+                face = (np.abs(pa - box[:, 1]) <= 1e-9 * size) & (np.abs(pb - box[:, 1]) <= 1e-9 * size)
+                side = 1
+            if not face.any():
+                continue
+            axis = int(np.argmax(face))
+            k = max(1, int(np.ceil(d / step)))
+            t = np.arange(1, k)[:, None] / k
+            chord = pa + t * (pb - pa)
+            x = chord.copy()
+            with np.errstate(all="ignore"):
+                for _ in range(tol.CREASE_NEWTON):
+                    f, g = surface.value_gradient(x)
+                    g = g.copy()
+                    g[:, axis] = 0.0  # steps within the face
+                    gg = np.einsum("ki,ki->k", g, g)
+                    x = x - (f / np.where(gg > 0, gg, np.inf))[:, None] * g
+                x[:, axis] = box[axis, side]
+                f, g = surface.value_gradient(x)
+                off = np.abs(f) / np.linalg.norm(g, axis=1)
+            # The trace must run close to the chord (one piece of one face) and lie on F = 0.
+            if not (np.all(np.isfinite(x)) and np.all(np.linalg.norm(x - chord, axis=1) <= 0.25 * step)
+                    and np.all(off <= 1e-12 * size)):
+                continue
+            idx = [a] + list(range(n, n + len(x))) + [b]
+            n += len(x)
+            new_pts.append(x)
+            new_edges += list(zip(idx[:-1], idx[1:]))
+    if not new_edges:
+        return curves
+    points = np.vstack([curves.points] + new_pts)
+    edges = np.vstack([curves.edges, np.array(new_edges, np.int64)])
+    return CurveSet(points=points, edges=edges, pieces=curves.pieces, special=curves.special,
+                    special_vertex=curves.special_vertex, wide=np.zeros(len(edges), bool))
+
+
+def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> CurveSet:
+    """One graph of the crease polylines: ends that meet are one corner; the pieces and special points."""
+    h = tol.CREASE_TRACE_STEP * step
+    pts, edges, base = [], [], 0
+    end_vertex = []  # (vertex, line, kind)
+    for k, (s, p, closed, how) in enumerate(lines):
+        n = len(p)
+        idx = base + np.arange(n)
+        e = np.stack([idx[:-1], idx[1:]], 1)
+        if closed:
+            e = np.vstack([e, [[idx[-1], idx[0]]]])
+        else:
+            end_vertex += [(int(idx[0]), k, how[0]), (int(idx[-1]), k, how[1])]
+        pts.append(p)
+        edges.append(e)
+        base += n
+    P = np.concatenate(pts)
+    E = np.concatenate(edges).reshape(-1, 2)
+    remap = np.arange(len(P))
+    special: dict[int, str] = {}
+    ends = [v for v, _, how in end_vertex if how in ("end", "meet", "lost")]
+    if ends:
+        g = nx.Graph()
+        g.add_nodes_from(ends)
+        close = cKDTree(P[ends]).query_pairs(tol.CREASE_CORNER * h, output_type="ndarray")
+        g.add_edges_from([(ends[i], ends[j]) for i, j in close.tolist()])
+        line_of = {v: k for v, k, _ in end_vertex}
+        how_of = {v: how for v, _, how in end_vertex}
+        for comp in sorted(nx.connected_components(g), key=min):
+            comp = sorted(comp)
+            which = sorted({lines[line_of[v]][0] for v in comp})
+            x = _corner(systems, which, P[comp].mean(axis=0), h) if len(comp) > 1 else None
+            if x is None:
+                for v in comp:
+                    special[v] = "end of the trace" if how_of[v] == "lost" else "end of a crease"
+                continue
+            P[comp[0]] = x
+            remap[comp] = comp[0]
+            special[comp[0]] = "corner of creases"
+    for v, _, how in end_vertex:
+        if how == "box":
+            special[v] = "end on the box"
+        elif how == "lost" and v not in special and remap[v] == v:
+            special[v] = "end of the trace"
+    E = remap[E]
+    E = E[E[:, 0] != E[:, 1]]
+    E = np.unique(np.sort(E, axis=1), axis=0)
+    used = np.zeros(len(P), bool)
+    used[E.ravel()] = True
+    new = np.cumsum(used) - 1
+    P, E = P[used], new[E]
+    special = {int(new[v]): kind for v, kind in special.items() if used[v]}
+    sp_vertices = sorted(special)
+    sp_index = {v: i for i, v in enumerate(sp_vertices)}
+    pieces = []
+    # Pieces: the lines, with their vertices renumbered.
+    base = 0
+    for s, p, closed, how in lines:
+        verts = new[remap[base + np.arange(len(p))]]
+        base += len(p)
+        ends = (-1, -1) if closed else (sp_index.get(int(verts[0]), -1), sp_index.get(int(verts[-1]), -1))
+        pieces.append(SingularCurve(points=P[verts], type=CREASE, sheets=1, half_sheets=2, closed=closed,
+                                    ends=ends, vertices=np.asarray(verts, np.int64)))
+    specials = [SpecialPoint(point=P[v].copy(), kind=special[v]) for v in sp_vertices]
+    return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
+                    special_vertex=np.asarray(sp_vertices, np.int64), wide=np.zeros(len(E), bool))
+
+
+def merge_curve_sets(a: CurveSet, b: CurveSet) -> CurveSet:
+    """One CurveSet of two (singular curves and creases), b's vertices after a's."""
+    if len(b.points) == 0:
+        return a
+    if len(a.points) == 0:
+        return b
+    n = len(a.points)
+    wa = a.wide if len(a.wide) == len(a.edges) else np.zeros(len(a.edges), bool)
+    wb = b.wide if len(b.wide) == len(b.edges) else np.zeros(len(b.edges), bool)
+    return CurveSet(points=np.vstack([a.points, b.points]), edges=np.vstack([a.edges, b.edges + n]),
+                    pieces=list(a.pieces) + [replace(c, vertices=c.vertices + n,
+                                                              ends=tuple(e + len(a.special) if e >= 0 else -1
+                                                                         for e in c.ends)) for c in b.pieces],
+                    special=list(a.special) + list(b.special),
+                    special_vertex=np.concatenate([a.special_vertex, b.special_vertex + n]),
+                    wide=np.concatenate([wa, wb]), wide_radius=max(a.wide_radius, b.wide_radius))

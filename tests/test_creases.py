@@ -1,0 +1,225 @@
+"""Sharp edges (issue #10): creases of Min/Max, Abs and R-functions followed by mesh edges.
+
+Checked independently of the mesher: crease points are found here by
+Newton (numpy, minimum-norm steps) on the two operands whose common zeros
+hold the crease, from random starts, and kept where F (written again in
+numpy) vanishes; each must lie on a mesh edge whose two ends are on the
+crease (to rounding, plus the chord's sagitta on a curved crease).  The
+edges along the crease have two triangles each, corners of three creases
+are vertices, and the mesh is closed (or open only on the box), manifold,
+with vertices on the surface.
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+import singmesh
+
+X, Y, Z = sp.symbols("x y z", real=True)
+LOC = {"x": X, "y": Y, "z": Z, "Max": sp.Max, "Min": sp.Min, "Abs": sp.Abs}
+SPH = "(x**2+y**2+z**2-1)"
+
+
+def _rotation(seed: int) -> np.ndarray:
+    """A float rotation (numpy QR), rows rounded to 15 significant digits as a user types them."""
+    q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return np.array([[float(f"{c:.15g}") for c in row] for row in q])
+
+
+def _lin(row) -> str:
+    return "({:.15g}*x + {:.15g}*y + {:.15g}*z)".format(*row)
+
+
+R = _rotation(11)
+N = _rotation(5)[0]
+
+#: name, equation (sympy syntax), box half-width, closed, crease pairs, radius of curvature of the
+#: creases (inf: straight), corners (points that must be vertices).
+CUBE_PAIRS = [(f"{a}{s}0.7", f"{b}{t}0.7") for a, b in (("x", "y"), ("x", "z"), ("y", "z"))
+              for s in "+-" for t in "+-"]
+
+
+def _rot_pairs(a):
+    """The 12 edges of the rotated cube of half-width a: pairs of face planes."""
+    return [(f"{_lin(R[i])}{s}{a}", f"{_lin(R[j])}{t}{a}") for i, j in ((0, 1), (0, 2), (1, 2))
+            for s in "+-" for t in "+-"]
+
+
+ROT_PAIRS, ROT_PAIRS_CUT = _rot_pairs(0.5), _rot_pairs(0.7)
+CUBE_CORNERS = np.array([[a, b, c] for a in (-0.7, 0.7) for b in (-0.7, 0.7) for c in (-0.7, 0.7)])
+CUT_CORNERS = np.linalg.solve(R, CUBE_CORNERS.T).T
+# The octahedron's creases: the Abs creases x = 0, y = 0, z = 0 on it, straight between its
+# vertices, where two of them cross (on the split planes of the symmetric box).
+OCTA_PAIRS = [(a, f"{s}{b}{t}{c}-1") for a, b, c in (("x", "y", "z"), ("y", "x", "z"), ("z", "x", "y"))
+              for s in ("", "-") for t in ("+", "-")]
+OCTA_CORNERS = np.vstack([np.eye(3), -np.eye(3)])
+CASES = [
+    ("half-ball-max", f"Max({SPH}, z)", 1.5, True, [(SPH, "z")], 1.0, None),
+    ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}**2 + z**2)", 1.5, True, [(SPH, "z")], 1.0, None),
+    ("cube-max", "Max(Abs(x), Abs(y), Abs(z)) - 0.7", 1.0, True, CUBE_PAIRS, np.inf, CUBE_CORNERS),
+    # (its corners 0.866 from the centre: inside the box)
+    ("cube-rotated", "Max(Abs({}), Abs({}), Abs({})) - 0.5".format(*(_lin(r) for r in R)), 1.0, True, ROT_PAIRS,
+     np.inf, np.linalg.solve(R, CUBE_CORNERS.T / 1.4).T),
+    # ... and one whose corners poke out of the box: creases end on its faces a few cells apart.
+    ("cube-rotated-cut", "Max(Abs({}), Abs({}), Abs({})) - 0.7".format(*(_lin(r) for r in R)), 1.0, False,
+     ROT_PAIRS_CUT, np.inf, CUT_CORNERS[np.all(np.abs(CUT_CORNERS) < 1, axis=1)]),
+    ("half-ball-rotated", f"Max({SPH}, {_lin(N)})", 1.5, True, [(SPH, _lin(N))], 1.0, None),
+    # Creases on split planes of the symmetric box: z = 0 and x = 0.
+    ("octahedron", "Abs(x) + Abs(y) + Abs(z) - 1", 1.3, True, OCTA_PAIRS, np.inf, OCTA_CORNERS),
+    ("octahedron-rotated", "Abs({}) + Abs({}) + Abs({}) - 1".format(*(_lin(r) for r in R)), 1.3, True,
+     [(_lin(R[i]), f"{s}{_lin(R[j])}{t}{_lin(R[k])}-1") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
+      for s in ("", "-") for t in ("+", "-")], np.inf, np.linalg.solve(R, OCTA_CORNERS.T).T),
+    ("upper-half-ball", f"Max({SPH}, -z)", 1.5, True, [(SPH, "z")], 1.0, None),
+    ("min-on-x0", f"Min({SPH}, x)", 1.5, False, [(SPH, "x")], 1.0, None),
+]
+
+
+def _expr(text):
+    return sp.sympify(text, locals=LOC)
+
+
+def _numpy(expr):
+    f = sp.lambdify((X, Y, Z), expr, "numpy")
+    return lambda p: np.broadcast_to(np.asarray(f(p[:, 0], p[:, 1], p[:, 2]), float), (len(p),))
+
+
+def crease_points(eq, pairs, box, starts=1200, seed=0):
+    """Points where both expressions of a pair vanish and F does (minimum-norm Newton from random starts)."""
+    F = _numpy(_expr(eq))
+    rng = np.random.default_rng(seed)
+    out = []
+    for a, b in pairs:
+        ea, eb = _expr(a), _expr(b)
+        fs = [_numpy(ea), _numpy(eb)]
+        js = [[_numpy(sp.diff(e, v)) for v in (X, Y, Z)] for e in (ea, eb)]
+        p = box[:, 0] + rng.random((max(100, starts // len(pairs)), 3)) * (box[:, 1] - box[:, 0])
+        for _ in range(40):
+            r = np.stack([f(p) for f in fs], 1)
+            j = np.stack([np.stack([d(p) for d in row], 1) for row in js], 1)
+            p = p - np.einsum("nij,nj->ni", np.linalg.pinv(j), r)
+        r = np.stack([f(p) for f in fs], 1)
+        size = float(np.max(box[:, 1] - box[:, 0]))
+        ok = np.isfinite(p).all(1) & (np.abs(r).max(1) < 1e-12)
+        ok &= np.all((p > box[:, 0] + 0.02 * size) & (p < box[:, 1] - 0.02 * size), 1)
+        p = p[ok]
+        out.append(p[np.abs(F(p)) < 1e-12])
+    return np.concatenate(out)
+
+
+def _on_crease(vertices, pairs, tol):
+    on = np.zeros(len(vertices), bool)
+    for a, b in pairs:
+        on |= (np.abs(_numpy(_expr(a))(vertices)) < tol) & (np.abs(_numpy(_expr(b))(vertices)) < tol)
+    return on
+
+
+def _segment_distance(p, a, b):
+    """Distance of each point p (n, 3) to the nearest of the segments a-b (m, 3)."""
+    d = b - a
+    best = np.full(len(p), np.inf)
+    for start in range(0, len(p), 256):
+        q = p[start:start + 256, None, :]
+        t = np.clip(np.einsum("nmi,mi->nm", q - a[None], d) / np.maximum(np.einsum("mi,mi->m", d, d), 1e-300),
+                    0, 1)
+        best[start:start + 256] = np.linalg.norm(q - (a[None] + t[..., None] * d[None]), axis=2).min(axis=1)
+    return best
+
+
+def _edges(T):
+    """The mesh's edges (sorted pairs) and the triangles each has, in numpy."""
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    return np.unique(e, axis=0, return_counts=True)
+
+
+def _mesh(name):
+    case = next(c for c in CASES if c[0] == name)
+    return singmesh.mesh(case[1], box=[[-case[2], case[2]]] * 3)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_crease_followed_by_edges(case):
+    name, eq, r, closed, pairs, radius, corners = case
+    box = np.array([[-r, r]] * 3)
+    size = 2 * r
+    m = _mesh(name)
+    V, T = m.vertices, m.faces
+    on = _on_crease(V, pairs, 1e-10 * size)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    crease_edges, counts = edges[sel], cnt[sel]
+    # Consecutive crease vertices (not a chord across a flat piece).
+    length = np.linalg.norm(V[crease_edges[:, 0]] - V[crease_edges[:, 1]], axis=1)
+    near = length <= 4 * size / 256
+    crease_edges, counts = crease_edges[near], counts[near]
+    assert len(crease_edges) > 50
+    samples = crease_points(eq, pairs, box)
+    assert len(samples) > 50
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    longest = float(length[length <= 4 * size / 256].max())
+    sagitta = 0.0 if np.isinf(radius) else longest ** 2 / (8 * radius) * 1.01
+    assert d.max() <= sagitta + 1e-9 * size, (d.max(), sagitta)
+    # Each edge along the crease has its two half-sheets' triangles.
+    assert np.all(counts == 2), np.bincount(counts)
+    if corners is not None:
+        dist = np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1)
+        assert dist.max() <= 1e-12 * size, dist
+        # The report (as the CLI prints it) lists the 12 edges and the corners.
+        text = m.report_text()
+        assert "creases              12" in text and text.count("corner of creases") == len(corners)
+    # The rest of the mesh is right.
+    _check_mesh(m, eq, box, closed)
+
+
+def _check_mesh(m, eq, box, closed):
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    V, T = m.vertices, m.faces
+    F = _numpy(_expr(eq))
+    h = 1e-7
+    g = np.stack([(F(V + h * u) - F(V - h * u)) / (2 * h) for u in np.eye(3)], 1)
+    gn = np.linalg.norm(g, axis=1)
+    assert np.abs(F(V)).max() / np.median(gn) <= 1e-10 * size
+    edges, cnt = _edges(T)
+    assert (cnt > 2).sum() == 0
+    # Open edges only on a face of the box (both ends on the same face).
+    tol = 1e-9 * size
+    open_ = edges[cnt == 1]
+    same_face = np.zeros(len(open_), bool)
+    for a in range(3):
+        for side in (0, 1):
+            on_face = np.abs(V[:, a] - box[a, side]) <= tol
+            same_face |= on_face[open_[:, 0]] & on_face[open_[:, 1]]
+    assert same_face.all(), (~same_face).sum()
+    if closed:
+        assert len(open_) == 0
+        assert len(np.unique(T)) - len(edges) + len(T) == 2
+        graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(V), len(V)))
+        label = connected_components(graph, directed=False)[1]
+        assert len(np.unique(label[np.unique(T)])) == 1
+    # The mesh lists its creases, each edge with two triangles.
+    assert m.singular_curves and all(c.type == "crease" for c in m.singular_curves)
+    assert m.curve_edges_short_of_sheets() == 0
+    assert len(m.curve_lines()[1]) == 0  # no curve edge without triangles
+
+
+def test_polynomial_has_no_creases():
+    assert singmesh.Surface.parse("x^2 + y^2 + z^2 - 1").crease_systems() == []
+    m = singmesh.mesh("x^2 + y^2 + z^2 - 1", box=[[-1.5, 1.5]] * 3, coarse=16, fine=64)
+    assert m.singular_curves == [] and m.stats["creases"] == 0
+
+
+def test_inactive_kinks_make_no_crease():
+    s = singmesh.Surface.parse("Max(Abs(x), Abs(y), Abs(z)) - 0.7")
+
+    def creases_at(q):
+        return [c for c in s.crease_systems() if np.abs(c.values(q)[0]).max() < 1e-15 and c.active(q).all()]
+
+    # Abs(x)'s kink at x = 0 lies under the Max's other arguments: no crease there ...
+    assert creases_at(np.array([[0.0, 0.7, 0.2]])) == []
+    assert creases_at(np.array([[0.0, 0.3, -0.7]])) == []
+    # ... while the tie of |x| and |y| on the surface is one, and the corner is on three.
+    assert len(creases_at(np.array([[0.7, -0.7, 0.1]]))) == 1
+    assert len(creases_at(np.array([[0.7, -0.7, 0.7]]))) == 3
