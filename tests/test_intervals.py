@@ -7,6 +7,8 @@ and every difference quotient along an axis in the derivative's bounds
 the pieces' derivatives).
 """
 
+import zlib
+
 import numpy as np
 import pytest
 import sympy
@@ -53,10 +55,11 @@ def _samples(rng, lo, hi, k):
     return lo[:, None] + t * (hi - lo)[:, None]
 
 
-def _check_enclosed(values, lo, hi, what):
-    # The samples' own rounding: a few ulps of the values, and of 1 where
-    # terms of size 1 cancel (R-functions, x^2 - 1 + ...).
-    slack = 4 * _EPS * (np.abs(np.stack([lo, hi])).max(axis=0) + 1.0)[:, None]
+def _check_enclosed(values, lo, hi, what, terms=1.0):
+    # The samples' own rounding: a few ulps of the values, and of the terms
+    # that cancel (R-functions: x - y + z - sqrt(...) with x, y, z ~ 5 is
+    # off by ~1e-15 in numpy's evaluation; x^2 - 1 + ...: of 1).
+    slack = 4 * _EPS * (np.abs(np.stack([lo, hi])).max(axis=0) + 1.0 + terms)[:, None]
     ok = np.isnan(values) | ((values >= lo[:, None] - slack) & (values <= hi[:, None] + slack))
     bad = np.argwhere(~ok)
     assert len(bad) == 0, f"{what}: sample {values[tuple(bad[0])]} outside [{lo[bad[0][0]]}, {hi[bad[0][0]]}]"
@@ -64,7 +67,7 @@ def _check_enclosed(values, lo, hi, what):
 
 @pytest.mark.parametrize("expr", EXPRESSIONS, ids=[str(e) for e in EXPRESSIONS])
 def test_bounds_enclose_samples(expr):
-    rng = np.random.default_rng(abs(hash(str(expr))) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(str(expr).encode()))
     g = Graph()
     node = g.from_sympy(expr)
     lo, hi = _boxes(rng, 300)
@@ -77,7 +80,7 @@ def test_bounds_enclose_samples(expr):
     v = np.where(np.isfinite(v), v, np.nan)
     # A box with a finite sample must not be declared undefined.
     assert not (np.isnan(blo) & np.isfinite(v).any(axis=1)).any()
-    _check_enclosed(v, blo, bhi, str(expr))
+    _check_enclosed(v, blo, bhi, str(expr), np.abs(p).max(axis=(1, 2)))
     # The bounds are not trivially wide on small boxes where F is tame.
     small = ((hi - lo).max(axis=1) < 1e-6) & np.isfinite(v).all(axis=1)
     small[small] &= np.ptp(v[small], axis=1) < 1e-4
@@ -87,7 +90,7 @@ def test_bounds_enclose_samples(expr):
 
 @pytest.mark.parametrize("expr", EXPRESSIONS, ids=[str(e) for e in EXPRESSIONS])
 def test_derivative_bounds_enclose_difference_quotients(expr):
-    rng = np.random.default_rng(1 + abs(hash(str(expr))) % 2**32)
+    rng = np.random.default_rng(1 + zlib.crc32(str(expr).encode()))
     g = Graph()
     node = g.from_sympy(expr)
     grads = [g.diff(node, a) for a in range(3)]
