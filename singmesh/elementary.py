@@ -47,8 +47,8 @@ from singmesh import tolerances as tol
 from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
-from singmesh.surface import CreaseSystem, Surface
-from singmesh.syntax import VARIABLES, read_equation
+from singmesh.surface import CreaseSystem, Surface, check_variables
+from singmesh.syntax import read_equation
 
 _EPS = float(np.finfo(float).eps)
 #: Bounds this small are the intervals' outward rounding of an exact zero
@@ -131,13 +131,7 @@ class ElementarySurface(Surface):
             Unknown symbols (the polynomial path's message), unsupported
             functions, a non-real constant, or a constant F.
         """
-        unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
-        if unknown:
-            raise SurfaceError(
-                "unknown symbol%s %s: only x, y, z are variables; give parameters as "
-                "keyword arguments or as definitions such as '; %s = 1;'"
-                % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
-            )
+        check_variables(expr)
         if not expr.free_symbols:
             raise SurfaceError(f"F = {expr} is constant: its zero set is empty or everything")
         values = {k: float(sympy.N(v)) for k, v in (params or {}).items()}

@@ -319,13 +319,7 @@ class PolynomialSurface(Surface):
     def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr],
                    rounding: float = 0.0) -> "PolynomialSurface":
         """The polynomial ``expr`` (checked, expanded) as a surface."""
-        unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
-        if unknown:
-            raise SurfaceError(
-                "unknown symbol%s %s: only x, y, z are variables; give parameters as "
-                "keyword arguments or as definitions such as '; %s = 1;'"
-                % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
-            )
+        check_variables(expr)
         _check_polynomial(expr)
         expr = sympy.expand(expr)
         try:
@@ -513,6 +507,17 @@ class PolynomialSurface(Surface):
 
 
 # ---------------------------------------------------------------- checks
+def check_variables(expr: sympy.Expr) -> None:
+    """Raise SurfaceError naming the symbols of ``expr`` other than x, y, z."""
+    unknown = sorted(s.name for s in expr.free_symbols if s not in VARIABLES)
+    if unknown:
+        raise SurfaceError(
+            "unknown symbol%s %s: only x, y, z are variables; give parameters as "
+            "keyword arguments or as definitions such as '; %s = 1;'"
+            % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
+        )
+
+
 def _is_polynomial(expr: sympy.Expr) -> bool:
     """Whether ``expr`` is a polynomial in x, y, z (other symbols are left to the builder's message)."""
     try:
