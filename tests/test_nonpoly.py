@@ -201,3 +201,35 @@ def test_an_empty_mesh_is_said(text, words):
     with pytest.warns(singmesh.EmptyMeshWarning, match=words):
         m = singmesh.mesh(text, B1, coarse=8, fine=16)
     assert len(m.faces) == 0
+
+
+# ------------------------------------------------------------ singular points of functions
+@pytest.mark.parametrize("seed", [5, 12])
+def test_node_of_a_function_in_general_position(seed):
+    # sin(u)^2 + sin(v)^2 - sin(w)^2 has a node (a real cone) where
+    # u = v = w = 0; (u, v, w) is (x, y, z) rotated by a float matrix
+    # written with 15 digits and shifted, so the node is off every split
+    # plane.  It must be found, be a vertex with its 2 fans, and match the
+    # cone's two curves on a small sphere (counted without singmesh).
+    import sympy
+
+    import oracles
+
+    q = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
+    shift = np.array([0.0123456789, -0.0345678901, 0.0234567891])
+    rows = [" + ".join(f"({q[i, j]:.15f})*{v}" for j, v in enumerate("xyz")) + f" + ({shift[i]:.10f})"
+            for i in range(3)]
+    text = f"sin({rows[0]})^2 + sin({rows[1]})^2 - sin({rows[2]})^2"
+    qr = np.array([[float(f"{q[i, j]:.15f}") for j in range(3)] for i in range(3)])
+    node = np.linalg.solve(qr, -np.array([float(f"{s:.10f}") for s in shift]))
+    m = singmesh.mesh(text, B1)
+    assert len(m.singularities) == 1
+    sp = m.singularities[0]
+    assert np.linalg.norm(sp.point - node) < 1e-9
+    assert sp.vertex is not None and np.linalg.norm(m.vertices[sp.vertex] - node) < 1e-9
+    assert sp.branches == 2 and mc.fans_at(m.faces, sp.vertex) == 2
+    xs = sympy.symbols("x y z")
+    f = sympy.lambdify(xs, sympy.sympify(text.replace("^", "**")), "numpy")
+    assert oracles.branches_on_sphere(lambda p: f(p[..., 0], p[..., 1], p[..., 2]), node, 0.05) == 2
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(B1)) == []
+    assert mc.non_manifold_edges(m.faces) == []
