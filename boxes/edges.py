@@ -293,11 +293,7 @@ def _onto_surface(surface, points: np.ndarray, free: np.ndarray, reach: float):
     ok : (K,) bool   the point reached the surface within ``reach``
     """
     start = points.copy()
-    for _ in range(3):
-        g = surface.gradient(points) * free
-        gg = np.einsum("ij,ij->i", g, g)
-        step = np.where(gg > 0, surface(points) / np.where(gg > 0, gg, 1.0), 0.0)
-        points = points - step[:, None] * g
+    points = surface.project(points, free, iterations=3)
     ok = surface.is_zero(points) & (np.linalg.norm(points - start, axis=1) <= reach)
     return points, ok
 

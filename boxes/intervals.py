@@ -413,6 +413,15 @@ class Graph:
             stack.extend(self.args[n])
         return sorted(need)
 
+    def last_uses(self, order: list[int]) -> dict[int, int]:
+        """The last node of ``order`` that reads each node: after it the node's
+        values can be dropped (evaluations keep only what is still needed)."""
+        last = {}
+        for n in order:
+            for a in self.args[n]:
+                last[a] = n
+        return last
+
 
 
 # ------------------------------------------------------------------ intervals
@@ -622,10 +631,7 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
     hi = np.asarray(hi, float)
     n_boxes = len(lo)
     order = graph.plan(outputs)
-    last = {}
-    for n in order:
-        for a in graph.args[n]:
-            last[a] = n
+    last = graph.last_uses(order)
     keep = set(outputs)
     L: dict = {}
     H: dict = {}
@@ -804,10 +810,7 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
     points = np.asarray(points, float)
     n_pts = len(points)
     order = graph.plan(outputs)
-    last = {}
-    for n in order:
-        for a in graph.args[n]:
-            last[a] = n
+    last = graph.last_uses(order)
     keep = set(outputs)
     V: dict = {}
     M: dict = {}

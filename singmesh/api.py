@@ -185,7 +185,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
                                                tube_id, curve_key0, float(cell.max()), b)
     fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
-                                      project=lambda q: project_to_surface(surf, q), apex=apex, fixed_keys=fixed)
+                                      project=surf.project, apex=apex, fixed_keys=fixed)
     # Where two axis skeletons meet (normal along an axis), for reference.
     nodes, node_axes = skeleton_nodes(surf, b, level=min(fine_level, tol.SKELETON_NODE_LEVEL))
     singular = []
@@ -384,15 +384,3 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
     offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
                                            np.concatenate(parts_sq), splits)
     return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
-
-
-def project_to_surface(surface: Surface, points: np.ndarray, iterations: int = 8) -> np.ndarray:
-    """Newton steps along grad F from points near the surface onto it."""
-    p = np.array(points, dtype=float)
-    for _ in range(iterations):
-        f = surface(p)
-        g = surface.gradient(p)
-        gg = np.einsum("ij,ij->i", g, g)
-        step = np.where(gg > 0, f / np.where(gg > 0, gg, 1), 0.0)
-        p = p - step[:, None] * g
-    return p

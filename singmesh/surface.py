@@ -190,6 +190,30 @@ class Surface(abc.ABC):
     def gradient_magnitude(self, points) -> np.ndarray:
         """:meth:`magnitude` of the three partial derivatives: (..., 3)."""
 
+    def project(self, points, free: np.ndarray | None = None, iterations: int = 8) -> np.ndarray:
+        """Points near the surface moved onto it by Newton steps along grad F.
+
+        Parameters
+        ----------
+        points : (K, 3) array_like
+        free : (K, 3) or (3,) bool, optional
+            The axes along which each point may move (a point on a face of
+            the domain stays in that face): the steps go along the free
+            part of grad F.  All axes by default.
+        iterations : int
+
+        Returns
+        -------
+        (K, 3) ndarray
+        """
+        p = np.array(points, dtype=float)
+        for _ in range(iterations):
+            g = self.gradient(p) if free is None else self.gradient(p) * free
+            gg = np.einsum("ij,ij->i", g, g)
+            step = np.where(gg > 0, self(p) / np.where(gg > 0, gg, 1.0), 0.0)
+            p = p - step[:, None] * g
+        return p
+
     def is_zero(self, points) -> np.ndarray:
         """Whether F is zero at ``points`` to within its rounding error: bool (...)."""
         v = self(points)

@@ -36,7 +36,7 @@ from scipy.spatial import cKDTree
 from singmesh import tolerances as tol
 from singmesh.surface import CHILD_OFFSETS, CreaseSystem, Surface
 
-from .singular_curves import CurveSet, SingularCurve, SpecialPoint
+from .singular_curves import CurveSet, SingularCurve, SpecialPoint, back_at_start
 
 #: The type of a crease's pieces in :class:`CurveSet`.
 CREASE = "crease"
@@ -204,7 +204,7 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
                 return pts[1:], "meet", None
         if not system.active(y[None])[0]:
             return pts[1:], "end", y
-        if n > 2 and np.linalg.norm(y - x0) < 0.75 * h:
+        if back_at_start(y, pts, h):
             return pts[1:], "closed", None
         t_new = _tangent(system, y)[0]
         t = t_new if np.dot(t_new, y - x) >= 0 else -t_new
@@ -412,14 +412,8 @@ def _join_on_box(surface: Surface, curves: CurveSet, box: np.ndarray, step: floa
             k = max(1, int(np.ceil(d / step)))
             t = np.arange(1, k)[:, None] / k
             chord = pa + t * (pb - pa)
-            x = chord.copy()
             with np.errstate(all="ignore"):
-                for _ in range(tol.CREASE_NEWTON):
-                    f, g = surface.value_gradient(x)
-                    g = g.copy()
-                    g[:, axis] = 0.0  # steps within the face
-                    gg = np.einsum("ki,ki->k", g, g)
-                    x = x - (f / np.where(gg > 0, gg, np.inf))[:, None] * g
+                x = surface.project(chord, free=np.arange(3) != axis, iterations=tol.CREASE_NEWTON)
                 x[:, axis] = box[axis, side]
                 f, g = surface.value_gradient(x)
                 off = np.abs(f) / np.linalg.norm(g, axis=1)

@@ -375,6 +375,16 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     return np.clip(z, box[:, 0], box[:, 1])
 
 
+def back_at_start(y: np.ndarray, pts: list, h: float) -> bool:
+    """Whether a trace ``pts`` (its start first) with next vertex ``y`` has come round to its start.
+
+    At the start, or at the first vertex after it: a start Newton left off
+    the curve (near a crossing) is never come back to within 0.75 h, and
+    the trace went round again and again (two cylinders at fine 256).
+    """
+    return len(pts) > 3 and min(np.linalg.norm(y - pts[0]), np.linalg.norm(y - pts[1])) < 0.75 * h
+
+
 def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,
                    earlier: cKDTree | None = None, earlier_points: np.ndarray | None = None,
                    earlier_tangents: np.ndarray | None = None):
@@ -401,11 +411,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
         if not _inside(box, y):
             pts.append(_clip(surface, box, x, y, h))
             return pts[1:], "box"
-        # Back at the start: at x0, or at the first vertex on the curve
-        # (a start Newton left off the curve, near a crossing, is never
-        # come back to within 0.75 h: the trace went round again and
-        # again, two cylinders at fine 256).
-        if len(pts) > 3 and min(np.linalg.norm(y - x0), np.linalg.norm(y - pts[1])) < 0.75 * h:
+        if back_at_start(y, pts, h):
             return pts[1:], "closed"
         if earlier is not None and n > 0:
             d, i = earlier.query(y)
