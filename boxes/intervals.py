@@ -895,7 +895,12 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                     elif op == "tanh":
                         dm = 1.0 - r * r
                     elif op == "sqrt":
-                        dm = 0.5 / r
+                        # An error e of u moves sqrt(u) by at most sqrt(e),
+                        # however small u is (0.5 / r is infinite at u = 0;
+                        # cos(k sqrt(u)) on the cosine bump's axis).
+                        mu = M[args[0]]
+                        with np.errstate(divide="ignore"):
+                            M[n] = np.abs(r) + np.where(mu == 0, 0.0, np.minimum(0.5 / r * mu, np.sqrt(mu / _EPS)))
                     elif op == "abs":
                         M[n] = M[args[0]]
                     elif op == "sgn":

@@ -190,20 +190,39 @@ def _even_of_sqrt(graph: Graph, sp: JetSpace, S: dict, op: str, arg: int, s: np.
 
     They are analytic in u (sum (-+c^2 u)^j / (2j)!) although sqrt(u) is
     not at u = 0: seed 000's cosine bump cos(k sqrt((y-py)^2 + (z-pz)^2))
-    on its axis, where it attaches a singular point.
+    on its axis, where it attaches a singular point.  The argument may
+    reach the sqrt through constant factors and Min/Max nodes (the bump
+    cut at its rim, cos(k Min(sqrt(u), pi/k))): at the points where the
+    Min/Max picks the sqrt it is the same series.
     """
     c = 1.0
     node = arg
-    if graph.ops[node] == "mul":
-        a, b = graph.args[node]
-        if graph.ops[a] == "const" and graph.ops[b] == "sqrt":
-            c, node = graph.params[a][0], b
-        elif graph.ops[b] == "const" and graph.ops[a] == "sqrt":
-            c, node = graph.params[b][0], a
+    picked = np.ones(len(s), bool)
+    while True:
+        op_n = graph.ops[node]
+        if op_n == "mul":
+            a, b = graph.args[node]
+            if not any(graph.depends(a, v) for v in range(3)):
+                c, node = c * float(S[a][0, 0]), b
+            elif not any(graph.depends(b, v) for v in range(3)):
+                c, node = c * float(S[b][0, 0]), a
+            else:
+                return s
+        elif op_n in ("max", "min"):
+            args = graph.args[node]
+            roots = [b for b in args if graph.ops[b] == "sqrt"]
+            if len(roots) != 1:
+                return s
+            vals = np.stack([S[b][:, 0] for b in args])
+            pick = np.argmax(vals, axis=0) if op_n == "max" else np.argmin(vals, axis=0)
+            picked &= pick == args.index(roots[0])
+            node = roots[0]
+        else:
+            break
     if graph.ops[node] != "sqrt":
         return s
     u = S[graph.args[node][0]]
-    at = u[:, 0] == 0
+    at = (u[:, 0] == 0) & picked
     if not at.any():
         return s
     n = sp.order

@@ -112,3 +112,25 @@ def test_polynomial_agrees_with_sympy_to_rounding():
         np.testing.assert_allclose(s.value_gradient(p)[1], grad, rtol=0, atol=1e-13 * size)
         np.testing.assert_allclose(s.hessian(p), hess, rtol=0, atol=1e-13 * size)
         assert np.all(s.gradient_magnitude(p) >= np.abs(grad) * (1 - 1e-12))
+
+
+R = sqrt((y - Rational(1, 10))**2 + (z + Rational(1, 5))**2)
+
+
+@pytest.mark.parametrize("expr, value, dx, curvature", [
+    (cos(sympy.pi / 2 * R) + x, 1.7, 1.0, -(np.pi / 2) ** 2),
+    (cos(sympy.pi / 2 * Min(2, R)) + x, 1.7, 1.0, -(np.pi / 2) ** 2),
+    (cosh(3 * Max(R, -1)) - x, 0.3, -1.0, 9.0),
+], ids=["cos", "cos-min", "cosh-max"])
+def test_cosine_bump_on_its_axis(expr, value, dx, curvature):
+    """Seed 000's cosine bump cos(k r) on its axis r = 0, also cut by Min/Max:
+    analytic there (1 -+ k^2 r^2 / 2 + ..., a series in r^2) although sqrt
+    is not.  The jet at the axis point (0.7, 0.1, -0.2) is that series'
+    and the magnitudes (rounding scales) are finite."""
+    s = ElementarySurface.from_expr(expr, str(expr))
+    p = np.array([[0.7, 0.1, -0.2]])
+    v, g, h = s.jet(p)
+    np.testing.assert_allclose(v, [value], rtol=1e-14)
+    np.testing.assert_allclose(g, [[dx, 0, 0]], atol=1e-15)
+    np.testing.assert_allclose(h[0], np.diag([0.0, curvature, curvature]), rtol=1e-13, atol=1e-15)
+    assert np.isfinite(s.magnitude(p)).all() and np.isfinite(s.gradient_magnitude(p)).all()

@@ -117,6 +117,10 @@ def test_topology(case):
 
 def test_close_to_marching_cubes_both_ways(case):
     m, f, box, chi, comps = case
+    _close_to_marching_cubes(m, f, box)
+
+
+def _close_to_marching_cubes(m, f, box):
     if importlib.util.find_spec("skimage") is None:
         pytest.skip("scikit-image is not installed (pip install -e '.[bench]'): the marching-cubes oracle is skipped")
     from skimage.measure import marching_cubes
@@ -233,3 +237,71 @@ def test_node_of_a_function_in_general_position(seed):
     assert oracles.branches_on_sphere(lambda p: f(p[..., 0], p[..., 1], p[..., 2]), node, 0.05) == 2
     assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(B1)) == []
     assert mc.non_manifold_edges(m.faces) == []
+
+
+# ------------------------------------------------------------ seed 000's cosine bump
+def _bump(n, h, p, uvw):
+    """Seed 000 (section 3.2): x^(n+1) - r^2 joined C^1 to the plane by the cosine bump.
+
+    k and q as the seed computes them; the two pieces are blended by a C^1
+    partition of unity w(u) over -q - d < u < -q + d (not the seed's
+    R-functions, whose union vanishes on the whole disc u = -q).
+    """
+    k = np.pi / (2 * np.sqrt(h ** (n + 1)))
+    q = 4 * h / (np.pi * (n + 1))
+    px, d = -(h + q), q / 2
+    u, v, w_ = uvw
+    r = np.sqrt((v - p[0]) ** 2 + (w_ - p[1]) ** 2)
+    f1 = (u - px) ** (n + 1) - (v - p[0]) ** 2 - (w_ - p[1]) ** 2
+    fb = u + q + q * np.cos(k * np.minimum(r, np.pi / k))
+    w = (1 - np.sin(np.pi / 2 * np.clip((u + q) / d, -1, 1))) / 2
+    return w * f1 + (1 - w) * (n + 1) * h ** n * fb, np.array([px, p[0], p[1]])
+
+
+@pytest.mark.parametrize("n, seed", [(1, 3), (2, 8), (3, 21)])
+def test_an_point_attached_to_a_plane_by_the_cosine_bump(n, seed):
+    # Seed 000's A_n point attached to a plane (x = 0 in the rotated frame)
+    # by its cosine bump, as a user would type it: the frame rotated by a
+    # float matrix written with 15 digits, the apex off the axes.  The A_n
+    # point is where the non-polynomial F and grad F vanish: it must be
+    # found, classified A_n from F's Taylor jet (the construction's normal
+    # form (u - px)^(n+1) - v^2 - w^2 in orthonormal coordinates), be a
+    # vertex with the link's curves on a small sphere (counted here without
+    # singmesh), and the rest a manifold: a disc (plane, bump, cone) glued
+    # at the point to the cone's other nappe when n is odd, cut by the box.
+    import oracles
+
+    h, p = 1.0, (0.13, -0.21)
+    qm = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
+    qr = np.array([[float(f"{qm[i, j]:.15f}") for j in range(3)] for i in range(3)])
+    shift = np.array([0.3125, -0.0625, 0.125])
+    rows = [" + ".join(f"({qr[i, j]:.15f})*{c}" for j, c in enumerate("xyz")) + f" + ({shift[i]})" for i in range(3)]
+    text = (f"w f1 + (1 - w) s fb; f1 = (u1 - px)^{n + 1} - (u2 - py)^2 - (u3 - pz)^2;"
+            f" fb = u1 + q + q cos(k min(sqrt((u2 - py)^2 + (u3 - pz)^2), pi/k));"
+            f" w = (1 - sin(pi/2 max(-1, min(1, (u1 + q)/d))))/2; s = {n + 1} h^{n};"
+            f" k = pi/(2 sqrt(h^{n + 1})); q = 4 h/(pi {n + 1}); px = -(h + q); d = q/2;"
+            f" u1 = {rows[0]}; u2 = {rows[1]}; u3 = {rows[2]}; h = {h}; py = {p[0]}; pz = {p[1]};")
+
+    def f(x, y, z):
+        uvw = np.einsum("ij,j...->i...", qr, np.stack([x, y, z])) + shift.reshape((3,) + (1,) * np.ndim(x))
+        return _bump(n, h, p, uvw)[0]
+
+    apex = np.linalg.solve(qr, _bump(n, h, p, np.zeros(3))[1] - shift)
+    box = np.array([[-2.6, 2.6]] * 3)
+    m = singmesh.mesh(text, box)
+    assert len(m.singularities) == 1
+    sp = m.singularities[0]
+    assert np.linalg.norm(sp.point - apex) < 1e-9
+    assert sp.classification.name == f"A{n}" and sp.classification.real_form == f"A{n}--"
+    branches = oracles.branches_on_sphere(lambda x: f(x[..., 0], x[..., 1], x[..., 2]), apex, 0.05)
+    assert branches == (1 if n % 2 == 0 else 2)
+    assert sp.vertex is not None and np.linalg.norm(m.vertices[sp.vertex] - apex) < 1e-9
+    assert sp.branches == branches and mc.fans_at(m.faces, sp.vertex) == branches
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, box) == []
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+    assert mc.components(m.faces) == 1 and mc.euler(m.vertices, m.faces) == 1
+    v = m.vertices
+    g = np.linalg.norm(_grad(f, v), axis=1)
+    assert (np.abs(f(*v.T)) / np.median(g)).max() <= 1e-10 * 5.2
+    _close_to_marching_cubes(m, f, box)
