@@ -197,7 +197,53 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
         if not grow.any():
             break
         inside |= grow
-    return _fill_diagonal_edges(links, inside)
+    return _fill_holes(tree, links, _fill_diagonal_edges(links, inside))
+
+
+def _fill_holes(tree: Octree, links, inside: np.ndarray) -> np.ndarray:
+    """The tube with its holes filled: small groups of leaves it encloses.
+
+    A simple leaf among the non-simple ones the tube grew into (near a
+    corner of creases in general position) stays outside the tube; the
+    tube's boundary round it is a closed rail a cell or two across, whose
+    strip to the curve covers what the rail of that half-sheet already
+    covers (four triangles on the curve edges there).  A group of leaves
+    outside the tube, joined by the surface's links, that meets neither
+    the box's boundary nor more than ``TUBE_HOLE_CELLS`` cells of space
+    is a hole: it joins the tube.
+    """
+    sq = links.link_square
+    if len(sq) == 0 or not inside.any():
+        return inside
+    minus, plus = links.minus[sq], links.plus[sq]
+    n = len(inside)
+    out = ~inside
+    both = (minus >= 0) & (plus >= 0)
+    a, b = minus[both], plus[both]
+    join = out[a] & out[b]
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    _, label = connected_components(coo_matrix((np.ones(int(join.sum())), (a[join], b[join])), shape=(n, n)),
+                                    directed=False)
+    # Groups that reach the box's boundary (a link square with one side
+    # outside the box) or hold no link at all are not holes.
+    on_surface = np.zeros(n, bool)
+    on_surface[minus[minus >= 0]] = True
+    on_surface[plus[plus >= 0]] = True
+    open_ = np.zeros(label.max() + 1, bool)
+    edge = (minus < 0) | (plus < 0)
+    open_[label[np.where(minus >= 0, minus, plus)[edge]]] = True
+    lo = np.full((label.max() + 1, 3), np.iinfo(np.int64).max)
+    hi = np.full((label.max() + 1, 3), np.iinfo(np.int64).min)
+    sel = out & on_surface
+    np.minimum.at(lo, label[sel], tree.corner[sel])
+    np.maximum.at(hi, label[sel], tree.corner[sel] + tree.size[sel, None])
+    small = (hi - lo).max(axis=1) <= tol.TUBE_HOLE_CELLS
+    hole = sel & small[label] & ~open_[label]
+    if not hole.any():
+        return inside
+    return inside | hole
 
 
 def _fill_diagonal_edges(links, inside: np.ndarray, rounds: int = 4) -> np.ndarray:
@@ -351,7 +397,7 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
                 # whose zigzag across the wedge the held snaps must see).
                 k0 = int(np.argmin(dist))
                 events, r, snap = np.roll(events, -k0), np.roll(r, -k0, axis=0), np.roll(snap, -k0)
-            snap = _steady_snaps(snap, steady, g)
+            snap = _steady_snaps(snap, steady, g, closed)
         m = len(events)
         steps = m if closed else m - 1
         for i in range(steps):
@@ -407,13 +453,18 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     return keys[good], pts[good]
 
 
-def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph) -> np.ndarray:
+def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph, closed: bool = False) -> np.ndarray:
     """The rail's snaps, with a step whose walk would start back along the last one held (``steady`` vertices).
 
     Along a crease a rail never walks back over the curve edges it just
     zipped: such a step is a zigzag of the rail (across the lattice, or
     across the bisector of the wedge at a corner of creases), not a turn.
+    A closed rail goes round twice and keeps the second round: its first
+    events are held against the last ones (a rail that starts inside a
+    zigzag would zip the closing step's curve edge twice, once reversed).
     """
+    if closed and len(snap) > 2:
+        return _steady_snaps(np.concatenate([snap, snap]), steady, g)[len(snap):]
     snap = np.array(snap)
     cur, came_from = int(snap[0]), -1
     for i in range(1, len(snap)):

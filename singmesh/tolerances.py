@@ -278,6 +278,11 @@ CURVE_RANK_MARGIN = 1e-4
 CURVE_TUBE_RADIUS = 1.5
 CURVE_TUBE_GROW = 4.0
 
+#: A group of leaves outside the tube that it encloses (no link to the box's
+#: boundary) at most this many fine cells across is a hole of the tube and
+#: joins it (its own polygon and the strip over it would cover it twice).
+TUBE_HOLE_CELLS = 3
+
 #: Changes of type along a curve are placed to this fraction of a cell.
 CURVE_PLACE = 1e-12
 

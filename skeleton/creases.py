@@ -477,6 +477,18 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
             special[v] = "end on the box"
         elif how == "lost" and v not in special and remap[v] == v:
             special[v] = "end of the trace"
+    # A trace started at a corner of creases whose two ends both meet that
+    # corner again, within a step of it, is the corner itself (its points
+    # coincide with it): not a crease.
+    starts = np.concatenate([[0], np.cumsum([len(p) for _, p, _, _ in lines])])
+    dropped = set()
+    for k, (s, p, closed, how) in enumerate(lines):
+        v0, v1 = remap[starts[k]], remap[starts[k + 1] - 1]
+        if not closed and v0 == v1 and np.linalg.norm(p - P[v0], axis=1).max() <= h:
+            dropped.add(k)
+    if dropped:
+        owner = np.repeat(np.arange(len(lines)), np.diff(starts))
+        E = E[~np.isin(owner[E[:, 0]], list(dropped))]
     E = remap[E]
     E = E[E[:, 0] != E[:, 1]]
     E = np.unique(np.sort(E, axis=1), axis=0)
@@ -490,9 +502,11 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     pieces = []
     # Pieces: the lines, with their vertices renumbered.
     base = 0
-    for s, p, closed, how in lines:
+    for k, (s, p, closed, how) in enumerate(lines):
         verts = new[remap[base + np.arange(len(p))]]
         base += len(p)
+        if k in dropped:
+            continue
         ends = (-1, -1) if closed else (sp_index.get(int(verts[0]), -1), sp_index.get(int(verts[-1]), -1))
         pieces.append(SingularCurve(points=P[verts], type=CREASE, sheets=1, half_sheets=2, closed=closed,
                                     ends=ends, vertices=np.asarray(verts, np.int64)))

@@ -57,6 +57,21 @@ CUT_CORNERS = np.linalg.solve(R, CUBE_CORNERS.T).T
 OCTA_PAIRS = [(a, f"{s}{b}{t}{c}-1") for a, b, c in (("x", "y", "z"), ("y", "x", "z"), ("z", "x", "y"))
               for s in ("", "-") for t in ("+", "-")]
 OCTA_CORNERS = np.vstack([np.eye(3), -np.eye(3)])
+
+
+def _shifted_octahedron(seed):
+    """|L1 + s1| + |L2 + s2| + |L3 + s3| = 1: the octahedron rotated by a float matrix and shifted
+    off the box's centre, so that no corner or crease is on a split plane.  (Seed 39 made a hole in
+    the tube near a corner, seed 21 a trace from a corner back to it: both failed before.)"""
+    r = _rotation(seed)
+    s = np.random.default_rng(seed).uniform(-0.05, 0.05, 3).round(12)
+    lin = [_lin(row)[:-1] + f" + {c:.12g})" for row, c in zip(r, s)]
+    pairs = [(lin[i], f"{sg}{lin[j]}{t}{lin[k]}-1") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
+             for sg in ("", "-") for t in ("+", "-")]
+    return (f"octahedron-shifted-{seed}", "Abs({}) + Abs({}) + Abs({}) - 1".format(*lin), 1.3, True, pairs, np.inf,
+            np.linalg.solve(r, (OCTA_CORNERS - s).T).T)
+
+
 CASES = [
     ("half-ball-max", f"Max({SPH}, z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}**2 + z**2)", 1.5, True, [(SPH, "z")], 1.0, None),
@@ -73,6 +88,7 @@ CASES = [
     ("octahedron-rotated", "Abs({}) + Abs({}) + Abs({}) - 1".format(*(_lin(r) for r in R)), 1.3, True,
      [(_lin(R[i]), f"{s}{_lin(R[j])}{t}{_lin(R[k])}-1") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
       for s in ("", "-") for t in ("+", "-")], np.inf, np.linalg.solve(R, OCTA_CORNERS.T).T),
+    *[_shifted_octahedron(seed) for seed in (21, 39)],
     ("upper-half-ball", f"Max({SPH}, -z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("min-on-x0", f"Min({SPH}, x)", 1.5, False, [(SPH, "x")], 1.0, None),
 ]
