@@ -7,6 +7,7 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
+from scipy.spatial import cKDTree
 from threadpoolctl import threadpool_limits
 
 from singmesh.boxes.edges import compute_events
@@ -22,6 +23,7 @@ from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
 from singmesh.skeleton.singular_curves import singular_curves
+from singmesh.skeleton.tips import tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
@@ -132,6 +134,15 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     avoid = _curve_points(curves, 0.25 * float(cell.max())) if len(curves.points) else None
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL),
                                        avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()))
+    # Where a root of a sum of squares in F vanishes on the surface (a
+    # cone's apex written with sqrt), F is not differentiable: such points
+    # are meshed as singular points, with a star.
+    tips = tip_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    if tips and avoid is not None:
+        d = cKDTree(avoid).query(np.array([t.point for t in tips]))[0]
+        tips = [t for t, far in zip(tips, d > tol.CURVE_AVOID * float(cell.max())) if far]
+    if tips:
+        points = sorted(points + tips, key=lambda sp: tuple(sp.point))
     kinds = [sp.classification for sp in points]
     t_sing = time.perf_counter() - t_sing
     if not len(curves.points):
@@ -361,7 +372,10 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
         p = points[stars[cycles.box[c]]].point
         span = slice(cycles.offsets[c], cycles.offsets[c + 1])
         squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
-        jobs.append((p, events.point[ev[span]], squares, skeleton_directions(surf.hessian(p))))
+        hess = surf.hessian(p)
+        # A tip (F not differentiable there) has no Hessian and no skeleton.
+        dirs = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
+        jobs.append((p, events.point[ev[span]], squares, dirs))
     all_spokes = skeleton_links_many(surf, jobs)
     for c, spokes in zip(star_cycles, all_spokes):
         i = stars[cycles.box[c]]

@@ -47,7 +47,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
-from singmesh.surface import CreaseSystem, Surface, check_variables
+from singmesh.surface import CreaseSystem, Surface, TipSystem, check_variables
 from singmesh.syntax import read_equation
 
 _EPS = float(np.finfo(float).eps)
@@ -513,6 +513,21 @@ class ElementarySurface(Surface):
             self._crease_systems = out
         return self._crease_systems
 
+    def tip_systems(self) -> list[TipSystem]:
+        """sqrt and powers 0 < p < 1 of sums of two or three squares: :class:`TipSystem` each."""
+        if getattr(self, "_tip_systems", None) is None:
+            g, f = self._graph, self._f
+            out = []
+            for n in g.plan([f]):
+                op, p = g.ops[n], g.params[n]
+                if op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0):
+                    squares = g._squares(g.args[n][0])
+                    if squares and 2 <= len(squares) <= 3:
+                        out.append(_Tip(self, f"{op} of a sum of {len(squares)} squares",
+                                        [g.substitute(f, n, g.zero)] + list(squares)))
+            self._tip_systems = out
+        return self._tip_systems
+
     def undefined_on(self, data: np.ndarray):
         """A subexpression of F undefined somewhere on one of the boxes, or None.
 
@@ -782,4 +797,30 @@ class _Kink(CreaseSystem):
         for gl, gh in zip(r.lo, r.hi):
             s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
             keep &= ~((gl > s) | (gh < -s))  # NaN (outside the domain): kept
+        return keep
+
+
+class _Tip(TipSystem):
+    """A root of a sum of squares in an :class:`ElementarySurface`: its equations as nodes of the graph."""
+
+    def __init__(self, surface: ElementarySurface, name: str, equations: list):
+        self.name = name
+        self._s = surface
+        g = surface._graph
+        self._eq = list(equations)
+        self._nodes = self._eq + [g.diff(e, a) for e in self._eq for a in range(3)]
+
+    def values(self, points):
+        p = np.asarray(points, float).reshape(-1, 3)
+        v = point_eval(self._s._graph, self._nodes, p)
+        m = len(self._eq)
+        return np.stack(v[:m], 1), np.stack(v[m:], 1).reshape(len(p), m, 3)
+
+    def may_vanish(self, data):
+        lo, hi = self._s.corners(data)
+        r = interval_eval(self._s._graph, self._eq, lo, hi)
+        keep = np.ones(len(lo), bool)
+        for gl, gh in zip(r.lo, r.hi):
+            s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+            keep &= ~((gl > s) | (gh < -s))
         return keep

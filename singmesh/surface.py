@@ -74,6 +74,35 @@ class CreaseSystem(abc.ABC):
         """(N,) bool on a stack of boxes (the surface's ``data``): G1 and G2 may both vanish there."""
 
 
+class TipSystem(abc.ABC):
+    """Where F is continuous but not differentiable at isolated points of its zero set.
+
+    A root of a sum of squares, sqrt(f1^2 + f2^2) or (f1^2 + f2^2)^(1/3)
+    in F, has infinite derivatives where f1 = f2 = 0 (a line, or a point
+    with three squares); where that set meets F = 0, the surface has a
+    point that is not smooth (the apex of the cone sqrt(x^2 + y^2) = |z|,
+    the cusped tip of r^(2/3) + z^2 = 1/2) and grad F = 0 does not say
+    so.  The equations E = (F0, f1, ..., fk), F0 being F with the root
+    replaced by 0 (F's value where the root vanishes), are smooth there
+    and hold such points as common zeros.
+
+    Attributes
+    ----------
+    name : str
+        The root, for messages.
+    """
+
+    name: str = ""
+
+    @abc.abstractmethod
+    def values(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """E and its Jacobian at ``points`` (n, 3): (n, m) and (n, m, 3)."""
+
+    @abc.abstractmethod
+    def may_vanish(self, data: np.ndarray) -> np.ndarray:
+        """(N,) bool on a stack of boxes (the surface's ``data``): all of E may vanish there."""
+
+
 class Surface(abc.ABC):
     """What the stages know of a surface F(x, y, z) = 0 (issue #10's contract).
 
@@ -288,6 +317,10 @@ class Surface(abc.ABC):
     # ------------------------------------------------------------ kinks
     def crease_systems(self) -> list[CreaseSystem]:
         """The kinks of F that may make creases on the surface (none for a smooth F)."""
+        return []
+
+    def tip_systems(self) -> list[TipSystem]:
+        """Roots of sums of squares in F, whose zeros on the surface are not smooth points (none for a polynomial)."""
         return []
 
     # ------------------------------------------------------------ on lines

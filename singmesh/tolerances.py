@@ -209,6 +209,13 @@ SINGULAR_MERGE = 1e-7
 #: at most the fine level.
 SINGULAR_LEVEL = 8
 
+#: Gauss-Newton steps on a tip system's equations (skeleton/tips.py): they
+#: are smooth at the tip, so a start in its candidate box converges in a
+#: few; the rest are cheap at these few starts.
+TIP_NEWTON_STEPS = 30
+#: A tip's equations vanish to this much of (their Jacobian's size x the box).
+TIP_RESIDUAL = 1e-12
+
 #: Depth of the search for skeleton nodes (F and two derivatives zero).
 SKELETON_NODE_LEVEL = 6
 

@@ -170,6 +170,8 @@ class SingularityType:
         where = "(" + ", ".join(_num(c) for c in self.point) + ")"
         p, m, z = self.hessian_signature
         sig = f"Hessian signature ({p}+, {m}-, {z} zero)"
+        if self.name == "non-differentiable":
+            return f"non-differentiable at {where}: {self.note}"
         if not self.is_simple:
             line = f"non-simple at {where}: corank {self.corank}, {sig}, 3-jet {self.jet}"
             return line + (f"; {self.note}" if self.note else "")

@@ -58,8 +58,11 @@ class SingularPoint:
             parts.append(f"Milnor {c.milnor}")
         if self.branches is not None:
             parts.append(f"{self.branches} branch{'es' if self.branches != 1 else ''} in the mesh")
-        p, n, zr = self.signature
-        parts.append(f"Hessian rank {self.hessian_rank} (+{p} -{n} 0x{zr})")
+        if c is not None and getattr(c, "name", "") == "non-differentiable":
+            parts.append("F not differentiable (no Hessian)")
+        else:
+            p, n, zr = self.signature
+            parts.append(f"Hessian rank {self.hessian_rank} (+{p} -{n} 0x{zr})")
         if self.vertex is None:
             parts.append("no triangle reaches it")
         return "  ".join(parts)

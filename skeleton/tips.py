@@ -1,0 +1,89 @@
+"""Tips: isolated points of the surface where F is continuous but not differentiable.
+
+A root of a sum of squares in F (``Surface.tip_systems``: the cone
+sqrt(x^2 + y^2) = |z|, the tip of (x^2 + y^2)^(1/3) + z^2 = 1/2) has
+infinite derivatives on the zero set of its squares; where that meets
+F = 0 the surface has a point that is not smooth, which grad F = 0 does
+not find.  Each such point is found as the common zero of the tip
+system's smooth equations (F with the root replaced by 0, and the bases
+of the squares):
+
+1. Candidate boxes: subdivide the box, keeping those where all the
+   equations may vanish (interval bounds), ``level`` times.
+2. Gauss-Newton on the equations from each candidate's centre, all at
+   once; a start that ends on a common zero (to rounding) inside the box
+   is a tip.
+3. Tips closer than ``SINGULAR_MERGE`` of the box are one.
+
+They are meshed as singular points are, with a star whose link cycles
+are coned to the point; the classification says what they are.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from singmesh import tolerances as tol
+from singmesh.surface import CHILD_OFFSETS, Surface
+
+from .classify import SingularityType
+from .points import SingularPoint
+
+#: The name tips are classified by.
+TIP = "non-differentiable"
+
+
+def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
+    """The points of F = 0 in ``box`` where a root of a sum of squares in F vanishes.
+
+    Returns
+    -------
+    list of SingularPoint, sorted by coordinates, each classified ``TIP``
+    (its note names the root).
+    """
+    box = np.asarray(box, dtype=float)
+    size = box[:, 1] - box[:, 0]
+    found, names = [], []
+    for system in surface.tip_systems():
+        data = surface.enclose(box)
+        corner = np.zeros((1, 3), np.int64)
+        for _ in range(level):
+            children = surface.split(data)
+            data = children.reshape((-1,) + children.shape[2:])
+            corner = (2 * corner[:, None, :] + CHILD_OFFSETS[None]).reshape(-1, 3)
+            keep = system.may_vanish(data)
+            data, corner = data[keep], corner[keep]
+            if len(corner) == 0:
+                break
+        if len(corner) == 0:
+            continue
+        x = box[:, 0] + (corner + 0.5) * size / (1 << level)
+        for _ in range(tol.TIP_NEWTON_STEPS):
+            r, j = system.values(x)
+            good = np.isfinite(r).all(axis=1) & np.isfinite(j).all(axis=(1, 2))
+            step = np.zeros_like(x)
+            step[good] = np.einsum("kij,kj->ki", np.linalg.pinv(j[good], rcond=1e-12), r[good])
+            x = np.where(good[:, None], x - step, np.nan)
+        r, j = system.values(x)
+        scale = np.maximum(np.abs(j).max(axis=(1, 2)), 1.0) * float(size.max())
+        ok = np.isfinite(x).all(axis=1) & (np.abs(r).max(axis=1) <= tol.TIP_RESIDUAL * scale)
+        ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
+        ok[ok] = surface.is_zero(x[ok]) | (np.abs(surface(x[ok])) <= tol.TIP_RESIDUAL * scale[ok])
+        found.append(x[ok])
+        names += [system.name] * int(ok.sum())
+    if not found or not sum(len(f) for f in found):
+        return []
+    x = np.concatenate(found)
+    order = np.lexsort(x.T[::-1])
+    x, names = x[order], [names[i] for i in order]
+    keep, out = [], []
+    for p, name in zip(x, names):
+        if any(np.linalg.norm(p - q) <= tol.SINGULAR_MERGE * size.max() for q in keep):
+            continue
+        keep.append(p)
+        kind = SingularityType(name=TIP, real_form=None, corank=3, milnor=None, branches=None, axis=None,
+                               hessian_signature=(0, 0, 3), jet="", point=tuple(float(c) for c in p),
+                               note=f"F is not differentiable here (a {name} vanishes): not an ADE point")
+        out.append(SingularPoint(point=p, residual=float(abs(surface(p[None])[0])), hessian_rank=0,
+                                 signature=(0, 0, 3), classification=kind))
+    return out
