@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 import warnings
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -186,8 +187,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
-    # Where two axis skeletons meet (normal along an axis), for reference.
-    nodes, node_axes = skeleton_nodes(surf, b, level=min(fine_level, tol.SKELETON_NODE_LEVEL))
+    # Where two axis skeletons meet (normal along an axis), for reference:
+    # the mesh does not use them, so they are found when first asked for.
+    node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
     singular = []
     for i, sp in enumerate(points):
         where = np.nonzero(vkeys == _point_key(i))[0]
@@ -214,7 +216,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
-             skeleton_nodes=nodes, skeleton_node_axes=node_axes, singular_curves=curve_list,
+             skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
              special_points=special, curve_graph=_curve_graph(curves, vkeys, curve_key0))
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
@@ -223,6 +225,17 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _skeleton_source(surf: Surface, box: np.ndarray, level: int):
+    """A function (picklable) finding the skeleton nodes as :func:`mesh` would."""
+    return partial(_find_skeleton_nodes, surf, box, level)
+
+
+def _find_skeleton_nodes(surf: Surface, box: np.ndarray, level: int):
+    """:func:`skeleton_nodes` with one BLAS thread and without warnings, as in :func:`mesh`."""
+    with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return skeleton_nodes(surf, box, level=level)
 
 
 def _why_empty(surface: Surface, box: np.ndarray) -> str:
