@@ -10,6 +10,7 @@ keep the cycle's orientation, so the fans agree with the rest of the mesh.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -97,20 +98,35 @@ def _sectors(spokes, p_key, p, keys, pts):
     """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
     n = len(keys)
     polygons, flat = [], set()
+    zips, tri_keys, tri_pts = [], [], []
     for k, (at, tkeys, tpts) in enumerate(spokes):
         nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
-        steps = (nxt_at - at) % n or n
         # Spoke A runs out from p to the cycle, spoke B back in from it.
         a_keys = [p_key] + tkeys[::-1] + [keys[at]]
         a_pts = [p] + tpts[::-1] + [pts[at]]
         b_keys = [p_key] + nkeys[::-1] + [keys[nxt_at]]
         b_pts = [p] + npts[::-1] + [pts[nxt_at]]
-        zipped = _zip_spokes(a_keys, a_pts, b_keys, b_pts)
-        for _, q in zipped:
-            e = [q[1] - q[0], q[2] - q[1], q[0] - q[2]]
-            area2 = np.linalg.norm(np.cross(e[0], -e[2]))
-            if area2 <= 1e-6 * max(np.dot(x, x) for x in e):
-                flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+        zk, zq = _zip_spokes(a_keys, a_pts, b_keys, b_pts)
+        zips.append((len(tri_keys), len(zk)))
+        tri_keys += zk
+        tri_pts += zq
+    tri_keys = np.array(tri_keys, np.int64)  # (T, 3)
+    tri_pts = np.array(tri_pts)               # (T, 3, 3)
+    # Flat triangles, all at once: twice the area against the longest
+    # edge squared (the same products as np.cross and np.linalg.norm of
+    # one vector: matmul of a row by a column is the BLAS dot product).
+    e = np.stack([tri_pts[:, 1] - tri_pts[:, 0], tri_pts[:, 2] - tri_pts[:, 1], tri_pts[:, 0] - tri_pts[:, 2]], 1)
+    c = np.cross(e[:, 0], -e[:, 2])
+    area2 = np.sqrt(np.matmul(c[:, None, :], c[:, :, None])[:, 0, 0])
+    longest = np.matmul(e[:, :, None, :], e[:, :, :, None])[:, :, 0, 0].max(axis=1)
+    is_flat = area2 <= 1e-6 * longest
+    for k, (at, tkeys, tpts) in enumerate(spokes):
+        nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
+        first, count = zips[k]
+        if is_flat[first:first + count].any():
+            flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+        steps = (nxt_at - at) % n or n
+        zipped = [(tri_keys[t], tri_pts[t]) for t in range(first, first + count)]
         # The outer part: the cycle from A's end to B's end.  It joins the
         # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
         # fanned from x, an inner vertex, when large.  Closed by the chord
@@ -119,11 +135,16 @@ def _sectors(spokes, p_key, p, keys, pts):
         if steps >= 2:
             last_keys, last_pts = zipped.pop()
             ends = (keys[at], keys[nxt_at])
-            x = next(i for i, k in enumerate(last_keys) if k not in ends)
+            x = next(i for i, k in enumerate(last_keys.tolist()) if k not in ends)
             polygons.append((np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64),
                              np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)])))
         polygons += zipped
     return polygons, flat
+
+
+def _length(v: np.ndarray) -> float:
+    """np.linalg.norm of one vector (the same square root of the same dot product), without its overhead."""
+    return math.sqrt(v.dot(v))
 
 
 def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angle: float = 2.0) -> list:
@@ -150,9 +171,9 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
             nxt = spokes[(k + 1) % len(spokes)]
             out.append(sp)
             u, w = first_point(sp) - p, first_point(nxt) - p
-            cos = np.dot(u, w) / max(np.linalg.norm(u) * np.linalg.norm(w), 1e-300)
+            cos = np.dot(u, w) / max(_length(u) * _length(w), 1e-300)
             steps = (nxt[0] - sp[0]) % n or n
-            if np.arccos(np.clip(cos, -1, 1)) > max_angle and steps >= 2:
+            if np.arccos(min(max(cos, -1.0), 1.0)) > max_angle and steps >= 2:
                 out.append(((sp[0] + steps // 2) % n, [], []))
                 changed = True
         spokes = out
@@ -161,27 +182,34 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
     return spokes
 
 
-def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> list:
+def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> tuple[list, list]:
     """Triangles between two spokes sharing their first vertex p.
 
     Rings from p outwards, each step advancing on the spoke whose next
     point gives the shorter diagonal: no triangle lies along one spoke,
     so neighbouring sectors never pick the same sliver.
+
+    Returns
+    -------
+    keys : list of [k0, k1, k2]
+    points : list of [q0, q1, q2]
     """
-    tris = []
+    tri_k = [[a_keys[0], a_keys[1], b_keys[1]]]
+    tri_q = [[a_pts[0], a_pts[1], b_pts[1]]]
     i = j = 1
-    tris.append(([a_keys[0], a_keys[1], b_keys[1]], [a_pts[0], a_pts[1], b_pts[1]]))
     while i < len(a_keys) - 1 or j < len(b_keys) - 1:
         adv_a = j == len(b_keys) - 1 or (
             i < len(a_keys) - 1
-            and np.linalg.norm(a_pts[i + 1] - b_pts[j]) <= np.linalg.norm(a_pts[i] - b_pts[j + 1]))
+            and _length(a_pts[i + 1] - b_pts[j]) <= _length(a_pts[i] - b_pts[j + 1]))
         if adv_a:
-            tris.append(([a_keys[i], a_keys[i + 1], b_keys[j]], [a_pts[i], a_pts[i + 1], b_pts[j]]))
+            tri_k.append([a_keys[i], a_keys[i + 1], b_keys[j]])
+            tri_q.append([a_pts[i], a_pts[i + 1], b_pts[j]])
             i += 1
         else:
-            tris.append(([a_keys[i], b_keys[j + 1], b_keys[j]], [a_pts[i], b_pts[j + 1], b_pts[j]]))
+            tri_k.append([a_keys[i], b_keys[j + 1], b_keys[j]])
+            tri_q.append([a_pts[i], b_pts[j + 1], b_pts[j]])
             j += 1
-    return [(np.array(k, np.int64), np.array(q)) for k, q in tris]
+    return tri_k, tri_q
 
 
 def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,

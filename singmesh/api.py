@@ -282,14 +282,16 @@ def _point_key(i: int) -> int:
     return -1 - i
 
 
-def _square_bounds(tree, square):
-    """(axis, lo, hi) in space of a contact square row (n, plane, u0, v0, size)."""
-    n, plane, u0, v0, size = (int(c) for c in square)
-    lo = np.zeros(3, np.int64)
-    lo[n], lo[(n + 1) % 3], lo[(n + 2) % 3] = plane, u0, v0
+def _square_bounds_many(tree, squares: np.ndarray):
+    """(axis, lo, hi) in space of contact square rows (n, plane, u0, v0, size): (K,), (K, 3), (K, 3)."""
+    squares = np.asarray(squares, np.int64).reshape(-1, 5)
+    n, plane, u0, v0, size = squares.T
+    rows = np.arange(len(n))
+    lo = np.zeros((len(n), 3), np.int64)
+    lo[rows, n], lo[rows, (n + 1) % 3], lo[rows, (n + 2) % 3] = plane, u0, v0
     hi = lo.copy()
-    hi[(n + 1) % 3] += size
-    hi[(n + 2) % 3] += size
+    hi[rows, (n + 1) % 3] += size
+    hi[rows, (n + 2) % 3] += size
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
@@ -368,14 +370,26 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
     star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
+    # The face squares of all star cycles' links at once; the Hessian and
+    # the skeleton directions once per point (a node has two cycles).
+    spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
+    sq_axis, sq_lo, sq_hi = _square_bounds_many(
+        tree, links.square[np.concatenate([cycles.squares[a:b] for a, b in spans]) if spans else np.zeros(0, np.int64)])
+    directions = {}
     # The skeleton curves of all star cycles are traced in one batch.
     jobs = []
-    for c in star_cycles:
-        p = points[stars[cycles.box[c]]].point
-        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
-        squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
-        jobs.append((p, events.point[ev[span]], squares, skeleton_directions(surf.hessian(p))))
+    done = 0
+    for c, (a, b) in zip(star_cycles, spans):
+        i = stars[cycles.box[c]]
+        p = points[i].point
+        if i not in directions:
+            directions[i] = skeleton_directions(surf.hessian(p))
+        e = done + b - a
+        squares = list(zip(sq_axis[done:e].tolist(), sq_lo[done:e], sq_hi[done:e]))
+        done = e
+        jobs.append((p, events.point[ev[a:b]], squares, directions[i]))
     all_spokes = skeleton_links_many(surf, jobs)
+    star_keys, star_pts, star_sizes = [], [], []
     for c, spokes in zip(star_cycles, all_spokes):
         i = stars[cycles.box[c]]
         p = points[i].point
@@ -386,12 +400,17 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
                                                  cycle_squares=cycles.squares[span])
         splits.update(split)
         for k, q in polys:
-            parts_sq.append(np.full(len(k), -1, np.int64))
-            parts_keys.append(k)
-            parts_pts.append(q)
-            parts_sizes.append([len(k)])
-            apex.append([True])  # large ones fan from their first vertex, p or a traced point
+            star_keys.append(k)
+            star_pts.append(q)
+            star_sizes.append(len(k))
         branches[i] = branches.get(i, 0) + 1
+    if star_sizes:
+        # Large ones fan from their first vertex, p or a traced point.
+        parts_keys.append(np.concatenate(star_keys))
+        parts_pts.append(np.concatenate(star_pts))
+        parts_sq.append(np.full(sum(star_sizes), -1, np.int64))
+        parts_sizes.append(star_sizes)
+        apex.append(np.ones(len(star_sizes), bool))
     sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
