@@ -126,8 +126,9 @@ def compute_events(surface: Surface, tree: Octree) -> Events:
     # ten times slower.
     b = tol.MAX_LEVEL + 1
     packed = (ends[:, 0] << (3 * b)) | (ends[:, 1] << (2 * b)) | (ends[:, 2] << b) | ends[:, 3]
-    _, first = np.unique(packed, return_index=True)
-    corners = ends[first]
+    # The rows read back from the sorted distinct keys (the packing is
+    # one-to-one): a plain sort, not unique's stable one for first indices.
+    corners = _unpack(_sorted_distinct(packed), 4, b)
     zero_line, zero_pos = _zero_lattice_points(surface, tree, corners, uniq)
 
     cell = tree.cell
@@ -165,14 +166,26 @@ def _zero_lattice_points(surface, tree, corners, uniq):
     # A lattice point is a corner on up to three lines: F is read once there.
     b = tol.MAX_LEVEL + 1
     packed = (xyz[:, 0] << (2 * b)) | (xyz[:, 1] << b) | xyz[:, 2]
-    _, first, inverse = np.unique(packed, return_index=True, return_inverse=True)
-    zero = surface.is_zero(tree.lattice_to_space(xyz[first]))[inverse.ravel()]
+    distinct, inverse = np.unique(packed, return_inverse=True)
+    zero = surface.is_zero(tree.lattice_to_space(_unpack(distinct, 3, b)))[inverse.ravel()]
     xyz = xyz[zero]
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
     v = xyz[np.arange(len(a)), (a + 2) % 3]
     ids = np.searchsorted(uniq, line_keys(a, u, v))
     return ids, xyz[np.arange(len(a)), a]
+
+
+def _sorted_distinct(keys: np.ndarray) -> np.ndarray:
+    """The distinct values of a 1-D int64 array, sorted (``np.unique`` without its hash table)."""
+    keys = np.sort(keys)
+    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if len(keys) else keys
+
+
+def _unpack(packed: np.ndarray, fields: int, bits: int) -> np.ndarray:
+    """Rows of ``fields`` non-negative ints of ``bits`` bits each, packed first field highest."""
+    mask = (np.int64(1) << bits) - 1
+    return np.stack([(packed >> (bits * (fields - 1 - i))) & mask for i in range(fields)], axis=1)
 
 
 def _corner_xyz(corners):
