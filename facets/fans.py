@@ -32,8 +32,9 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
 
     Returns
     -------
-    polygons : list of (keys (k,), points (k, 3)); the first vertex is p
-        or a traced point (an inner vertex to fan from, if large)
+    polygons : (keys (S,), points (S, 3), sizes list of P ints)
+        The polygons one after the other; the first vertex of each is p or
+        a traced point (an inner vertex to fan from, if large)
     splits : dict
         ``(square, a, b) -> [(node_key, node_point), ...]`` for every cycle
         link a -> b (on that square) that received face nodes, in order
@@ -53,15 +54,20 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     # a spoke (skeleton link) meets it.
     keys, pts, spokes = [], [], []
     expanded = {}
+    ckeys = [int(k) for k in cycle_keys]
+    nodes_after: dict = {}  # the links ending on a new node, by the cycle link they cut, in order
+    for s in links:
+        if s.vertex is None:
+            nodes_after.setdefault(s.after, []).append(s)
     for i in range(m):
         expanded[i] = len(keys)
-        keys.append(int(cycle_keys[i]))
+        keys.append(ckeys[i])
         pts.append(cycle_points[i])
-        for s in (s for s in links if s.after == i and s.vertex is None):
+        for s in nodes_after.get(i, ()):
             node_key = next_key
             trace_keys = list(range(next_key + 1, next_key + 1 + len(s.trace)))
             next_key += 1 + len(s.trace)
-            a, b = int(cycle_keys[i]), int(cycle_keys[(i + 1) % m])
+            a, b = ckeys[i], ckeys[(i + 1) % m]
             sq = -1 if cycle_squares is None else int(cycle_squares[i])
             splits.setdefault((sq, a, b), []).append((node_key, s.node))
             spokes.append((len(keys), trace_keys, list(s.trace)))
@@ -81,7 +87,8 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         extra = (first + n // 2) % n
         spokes = sorted(spokes + [(first, [], [])] * (not spokes) + [(extra, [], [])])
     if n < 3 or len({a for a, _, _ in spokes}) < 2:
-        return [], splits, next_key  # a collapsed cycle: no area to fan
+        # A collapsed cycle: no area to fan.
+        return (np.zeros(0, np.int64), np.zeros((0, 3)), []), splits, next_key
     spokes = _narrow_sectors(spokes, p, keys, pts)
     # Traced points are for shape only: a spoke whose points make a flat
     # triangle with a neighbour's (two traces on one line of the skeleton)
@@ -97,7 +104,7 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
 def _sectors(spokes, p_key, p, keys, pts):
     """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
     n = len(keys)
-    polygons, flat = [], set()
+    flat = set()
     zips, tri_keys, tri_pts = [], [], []
     for k, (at, tkeys, tpts) in enumerate(spokes):
         nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
@@ -120,26 +127,30 @@ def _sectors(spokes, p_key, p, keys, pts):
     area2 = np.sqrt(np.matmul(c[:, None, :], c[:, :, None])[:, 0, 0])
     longest = np.matmul(e[:, :, None, :], e[:, :, :, None])[:, :, 0, 0].max(axis=1)
     is_flat = area2 <= 1e-6 * longest
+    out_k, out_q, sizes = [], [], []
     for k, (at, tkeys, tpts) in enumerate(spokes):
         nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
         first, count = zips[k]
         if is_flat[first:first + count].any():
             flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
         steps = (nxt_at - at) % n or n
-        zipped = [(tri_keys[t], tri_pts[t]) for t in range(first, first + count)]
         # The outer part: the cycle from A's end to B's end.  It joins the
         # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
         # fanned from x, an inner vertex, when large.  Closed by the chord
         # alone, an arc along a flat sheet cut by one face of the star would
         # have no area.
         if steps >= 2:
-            last_keys, last_pts = zipped.pop()
+            count -= 1
+            last_keys, last_pts = tri_keys[first + count], tri_pts[first + count]
             ends = (keys[at], keys[nxt_at])
             x = next(i for i, k in enumerate(last_keys.tolist()) if k not in ends)
-            polygons.append((np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64),
-                             np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)])))
-        polygons += zipped
-    return polygons, flat
+            out_k.append(np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64))
+            out_q.append(np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)]))
+            sizes.append(steps + 2)
+        out_k.append(tri_keys[first:first + count].reshape(-1))
+        out_q.append(tri_pts[first:first + count].reshape(-1, 3))
+        sizes += [3] * count
+    return (np.concatenate(out_k), np.concatenate(out_q), sizes), flat
 
 
 def _length(v: np.ndarray) -> float:

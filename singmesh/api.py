@@ -399,10 +399,9 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
         polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
                                                  cycle_squares=cycles.squares[span])
         splits.update(split)
-        for k, q in polys:
-            star_keys.append(k)
-            star_pts.append(q)
-            star_sizes.append(len(k))
+        star_keys.append(polys[0])
+        star_pts.append(polys[1])
+        star_sizes += polys[2]
         branches[i] = branches.get(i, 0) + 1
     if star_sizes:
         # Large ones fan from their first vertex, p or a traced point.

@@ -71,6 +71,12 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, sq
 
 
 # ------------------------------------------------------------- all at once
+def _lengths(v: np.ndarray) -> np.ndarray:
+    """np.linalg.norm of each row of ``v`` (K, 3), with its bits: the square
+    root of the same BLAS dot product (matmul of a row by a column)."""
+    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None])[:, 0, 0])
+
+
 def _solve_stack(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Solve stacked systems a x = b; (x, ok), ok False where a is singular.
 
@@ -278,7 +284,8 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
             if not ok[k]:
                 continue
             c = active[j]
-            if any(np.linalg.norm(node[k] - s.node) <= near[k] for s in links[c] + found[j]):
+            seen = links[c] + found[j]
+            if seen and (_lengths(node[k] - np.array([s.node for s in seen])) <= near[k]).any():
                 continue  # two directions crossing the cycle at one point
             if not traced[k]:
                 continue
