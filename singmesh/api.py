@@ -149,9 +149,10 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
-        # The stars grow along the leaves' adjacency alone: this tree's
-        # events and links would be replaced by the refined tree's.
-        cubes = star_cubes(tree, leaf_sides(tree), centres)
+        # The stars grow along the adjacency of the leaves that failed the
+        # simplicity test alone: this tree's events and links would be
+        # replaced by the refined tree's.
+        cubes = star_cubes(tree, leaf_sides(tree, np.nonzero(~tree.simple)[0]), centres)
     else:
         cubes = None
         events = compute_events(surf, tree)
