@@ -200,7 +200,7 @@ def face_links(surface: Surface, tree: Octree, events: Events) -> FaceLinks:
     if retry.any():
         mode = np.where(retry, 2, mode)
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
-    minus, plus = _sides(tree, squares)
+    minus, plus = _sides(tree, squares, owner, owner_side)
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
 
@@ -227,20 +227,23 @@ def leaf_sides(tree: Octree, leaves: np.ndarray | None = None) -> LeafSides:
     all the adjacency among them (e.g. the leaves that failed the
     simplicity test, which the stars grow along) at a fraction of the cost.
     """
-    squares, _, _ = contact_squares(tree, leaves)
-    minus, plus = _sides(tree, squares)
+    squares, owner, owner_side = contact_squares(tree, leaves)
+    minus, plus = _sides(tree, squares, owner, owner_side)
     return LeafSides(square=squares, minus=minus, plus=plus)
 
 
-def _sides(tree: Octree, squares):
-    """Leaves on the -n and +n sides of each square (-1 where none)."""
+def _sides(tree: Octree, squares, owner, owner_side):
+    """Leaves on the -n and +n sides of each square (-1 where none).
+
+    The owner (:func:`contact_squares`) is on one side, the side its face
+    looks in from; the leaf on the other side is looked up.
+    """
     n, plane, u0, v0, size = squares.T
-    centre = np.zeros((len(squares), 3), np.int64)
+    other = np.zeros((len(squares), 3), np.int64)
     r = np.arange(len(squares))
-    centre[r, (n + 1) % 3] = 2 * u0 + size
-    centre[r, (n + 2) % 3] = 2 * v0 + size
-    below = centre.copy()
-    above = centre.copy()
-    below[r, n] = 2 * plane - 1
-    above[r, n] = 2 * plane + 1
-    return tree.find_leaves(below), tree.find_leaves(above)
+    other[r, (n + 1) % 3] = 2 * u0 + size
+    other[r, (n + 2) % 3] = 2 * v0 + size
+    # The square's centre pushed half a cell off the face, away from the owner.
+    other[r, n] = np.where(owner_side == 0, 2 * plane - 1, 2 * plane + 1)
+    found = tree.find_leaves(other)
+    return np.where(owner_side == 0, found, owner), np.where(owner_side == 0, owner, found)
