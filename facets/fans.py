@@ -105,20 +105,24 @@ def _sectors(spokes, p_key, p, keys, pts):
     """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
     n = len(keys)
     flat = set()
-    zips, tri_keys, tri_pts = [], [], []
-    for k, (at, tkeys, tpts) in enumerate(spokes):
-        nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
+    # One table of the vertices: p, the cycle with its nodes, then each
+    # spoke's traced points; the triangles are rows of indices into it.
+    tab_k, tab_p, trace_at = [p_key] + list(keys), [p] + list(pts), []
+    for _, tkeys, tpts in spokes:
+        trace_at.append(list(range(len(tab_k), len(tab_k) + len(tkeys))))
+        tab_k += tkeys
+        tab_p += tpts
+    tab_k, tab_p = np.array(tab_k, np.int64), np.array(tab_p)
+    zips, tris = [], []
+    for k, (at, _, _) in enumerate(spokes):
+        nxt = (k + 1) % len(spokes)
         # Spoke A runs out from p to the cycle, spoke B back in from it.
-        a_keys = [p_key] + tkeys[::-1] + [keys[at]]
-        a_pts = [p] + tpts[::-1] + [pts[at]]
-        b_keys = [p_key] + nkeys[::-1] + [keys[nxt_at]]
-        b_pts = [p] + npts[::-1] + [pts[nxt_at]]
-        zk, zq = _zip_spokes(a_keys, a_pts, b_keys, b_pts)
-        zips.append((len(tri_keys), len(zk)))
-        tri_keys += zk
-        tri_pts += zq
-    tri_keys = np.array(tri_keys, np.int64)  # (T, 3)
-    tri_pts = np.array(tri_pts)               # (T, 3, 3)
+        zipped = _zip_spokes([0] + trace_at[k][::-1] + [1 + at], [0] + trace_at[nxt][::-1] + [1 + spokes[nxt][0]],
+                             tab_p)
+        zips.append((len(tris), len(zipped)))
+        tris += zipped
+    tris = np.array(tris, np.int64)  # (T, 3)
+    tri_pts = tab_p[tris]            # (T, 3, 3)
     # Flat triangles, all at once: twice the area against the longest
     # edge squared (the same products as np.cross and np.linalg.norm of
     # one vector: matmul of a row by a column is the BLAS dot product).
@@ -127,8 +131,8 @@ def _sectors(spokes, p_key, p, keys, pts):
     area2 = np.sqrt(np.matmul(c[:, None, :], c[:, :, None])[:, 0, 0])
     longest = np.matmul(e[:, :, None, :], e[:, :, :, None])[:, :, 0, 0].max(axis=1)
     is_flat = area2 <= 1e-6 * longest
-    out_k, out_q, sizes = [], [], []
-    for k, (at, tkeys, tpts) in enumerate(spokes):
+    out, sizes = [], []
+    for k, (at, tkeys, _) in enumerate(spokes):
         nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
         first, count = zips[k]
         if is_flat[first:first + count].any():
@@ -141,16 +145,15 @@ def _sectors(spokes, p_key, p, keys, pts):
         # have no area.
         if steps >= 2:
             count -= 1
-            last_keys, last_pts = tri_keys[first + count], tri_pts[first + count]
+            last = tris[first + count].tolist()
             ends = (keys[at], keys[nxt_at])
-            x = next(i for i, k in enumerate(last_keys.tolist()) if k not in ends)
-            out_k.append(np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64))
-            out_q.append(np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)]))
+            x = next(v for v in last if tab_k[v] not in ends)
+            out.append(np.array([x] + [1 + (at + j) % n for j in range(steps + 1)], np.int64))
             sizes.append(steps + 2)
-        out_k.append(tri_keys[first:first + count].reshape(-1))
-        out_q.append(tri_pts[first:first + count].reshape(-1, 3))
+        out.append(tris[first:first + count].reshape(-1))
         sizes += [3] * count
-    return (np.concatenate(out_k), np.concatenate(out_q), sizes), flat
+    out = np.concatenate(out)
+    return (tab_k[out], tab_p[out], sizes), flat
 
 
 def _length(v: np.ndarray) -> float:
@@ -193,34 +196,31 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
     return spokes
 
 
-def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> tuple[list, list]:
+def _zip_spokes(a: list, b: list, points: np.ndarray) -> list:
     """Triangles between two spokes sharing their first vertex p.
 
-    Rings from p outwards, each step advancing on the spoke whose next
-    point gives the shorter diagonal: no triangle lies along one spoke,
-    so neighbouring sectors never pick the same sliver.
+    ``a`` and ``b`` are the spokes' vertices (indices into ``points``)
+    from p outwards.  Rings from p outwards, each step advancing on the
+    spoke whose next point gives the shorter diagonal: no triangle lies
+    along one spoke, so neighbouring sectors never pick the same sliver.
 
     Returns
     -------
-    keys : list of [k0, k1, k2]
-    points : list of [q0, q1, q2]
+    list of [i, j, k] vertex indices
     """
-    tri_k = [[a_keys[0], a_keys[1], b_keys[1]]]
-    tri_q = [[a_pts[0], a_pts[1], b_pts[1]]]
+    tris = [[a[0], a[1], b[1]]]
     i = j = 1
-    while i < len(a_keys) - 1 or j < len(b_keys) - 1:
-        adv_a = j == len(b_keys) - 1 or (
-            i < len(a_keys) - 1
-            and _length(a_pts[i + 1] - b_pts[j]) <= _length(a_pts[i] - b_pts[j + 1]))
+    while i < len(a) - 1 or j < len(b) - 1:
+        adv_a = j == len(b) - 1 or (
+            i < len(a) - 1
+            and _length(points[a[i + 1]] - points[b[j]]) <= _length(points[a[i]] - points[b[j + 1]]))
         if adv_a:
-            tri_k.append([a_keys[i], a_keys[i + 1], b_keys[j]])
-            tri_q.append([a_pts[i], a_pts[i + 1], b_pts[j]])
+            tris.append([a[i], a[i + 1], b[j]])
             i += 1
         else:
-            tri_k.append([a_keys[i], b_keys[j + 1], b_keys[j]])
-            tri_q.append([a_pts[i], b_pts[j + 1], b_pts[j]])
+            tris.append([a[i], b[j + 1], b[j]])
             j += 1
-    return tri_k, tri_q
+    return tris
 
 
 def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,
