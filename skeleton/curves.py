@@ -250,15 +250,13 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
         sizes = np.array([len(q) for q in pts])
         allp = np.concatenate(pts)
         g = np.einsum("ki,ki->k", surface.gradient(allp), np.repeat(np.array(vs), sizes, axis=0))
-        cyc, idx = [], []
-        start = 0
-        for j, m in enumerate(sizes.tolist()):
-            gi = g[start:start + m]
-            cross = np.nonzero(~(gi * np.roll(gi, -1) >= 0))[0]
-            cyc.extend([j] * len(cross))
-            idx.extend(cross.tolist())
-            start += m
-        cyc, idx = np.array(cyc, np.int64), np.array(idx, np.int64)
+        # All cycles at once: each vertex against the next one of its cycle.
+        starts = np.cumsum(sizes) - sizes
+        follow = np.arange(len(g)) + 1
+        follow[(starts + sizes - 1)[sizes > 0]] = starts[sizes > 0]
+        change = np.nonzero(~(g * g[follow] >= 0))[0]
+        cyc = (np.searchsorted(starts, change, side="right") - 1).astype(np.int64)
+        idx = (change - starts[cyc]).astype(np.int64)
         if len(cyc):
             a = np.array([pts[j][i] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
             b = np.array([pts[j][(i + 1) % sizes[j]] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
