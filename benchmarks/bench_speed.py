@@ -6,9 +6,10 @@ Three tables:
    on a 64^3 grid, sampling included, on the sphere, the tanglecube,
    Cayley's cubic and the Barth sextic: one process, the two alternating,
    medians of ``--repeat`` (default 5) runs after a warm-up, wall and CPU
-   time.  The marching cubes side is the judge's (``perf.py``): F from the
-   surface's factored sympy expression by ``sympy.lambdify``, sampled on
-   the grid, then ``skimage.measure.marching_cubes``.  singmesh gets the text, as a
+   time.  The marching cubes side is the judge's (``perf.py``): F read by
+   sympy from the judge's text and lambdified (in the time, as singmesh's
+   parse is in its), sampled on the grid, then
+   ``skimage.measure.marching_cubes``.  singmesh gets the text, as a
    user gives it (the parse is in its time).
 2. Time against ``coarse`` (16, 32, 64, 128) on the same surfaces, with the
    number of leaves (surface boxes) and the time per 1000 leaves: the time
@@ -36,26 +37,32 @@ import sympy
 import nodes
 import singmesh
 
-#: (name, text, box, expression for marching cubes): the judge's four
-#: surfaces (perf.py); marching cubes samples the factored sympy form,
-#: as the judge does (not singmesh's expanded polynomial).
-_x, _y, _z = nodes.VARIABLES
+#: (name, text for singmesh, box, text for marching cubes): the judge's four
+#: surfaces (perf.py); marching cubes reads the judge's own (factored) text.
 SURFACES = [
-    ("sphere", "x^2+y^2+z^2-1", ((-2.0, 2.0),) * 3, _x**2 + _y**2 + _z**2 - 1),
-    ("tanglecube", "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3.0, 3.0),) * 3,
-     _x**4 - 5 * _x**2 + _y**4 - 5 * _y**2 + _z**4 - 5 * _z**2 + sympy.Float("11.8")),
-    ("cayley", nodes.SURFACES["cayley"].text, nodes.SURFACES["cayley"].box, nodes.SURFACES["cayley"].expr),
-    ("barth", nodes.SURFACES["barth"].text, nodes.SURFACES["barth"].box, nodes.SURFACES["barth"].expr),
+    ("sphere", "x^2+y^2+z^2-1", ((-2.0, 2.0),) * 3, "x^2+y^2+z^2-1"),
+    ("tanglecube", "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8", ((-3.0, 3.0),) * 3, "x^4-5*x^2+y^4-5*y^2+z^4-5*z^2+11.8"),
+    ("cayley", nodes.SURFACES["cayley"].text, nodes.SURFACES["cayley"].box, "4*(x^2+y^2+z^2)+16*x*y*z-1"),
+    ("barth", nodes.SURFACES["barth"].text, nodes.SURFACES["barth"].box,
+     "4*(((1+sqrt(5))/2)**2*x**2-y**2)*(((1+sqrt(5))/2)**2*y**2-z**2)*(((1+sqrt(5))/2)**2*z**2-x**2)"
+     "-(1+2*((1+sqrt(5))/2))*(x**2+y**2+z**2-1)**2"),
 ]
+
 
 #: The nodal surfaces of the scaling by nodes (keys of nodes.SURFACES / nodes.LARGE).
 NODAL = ["cayley", "kummer", "barth", "barth10"]
 
 
-def marching_cubes(f, box, n: int) -> int:
-    """Sample ``f`` on an (n+1)^3 grid over ``box`` and run marching cubes; the vertex count."""
+def marching_cubes(text: str, box, n: int) -> int:
+    """The judge's marching cubes: F read from ``text`` by sympy and lambdified, sampled on an
+    (n+1)^3 grid over ``box``, then ``skimage.measure.marching_cubes``; the vertex count.
+
+    The reading is in the time, as singmesh's parse is in its own.
+    """
     from skimage.measure import marching_cubes as mc
 
+    x, y, z = sympy.symbols("x y z")
+    f = sympy.lambdify((x, y, z), sympy.sympify(text.replace("^", "**")), "numpy")
     b = np.asarray(box, float)
     axes = [np.linspace(lo, hi, n + 1) for lo, hi in b]
     X, Y, Z = np.meshgrid(*axes, indexing="ij")
@@ -74,15 +81,14 @@ def compare(repeat: int, res: int) -> None:
     print(f"1. singmesh (defaults) against marching cubes {res}^3 with sampling; medians of {repeat}, alternating")
     print(f"{'surface':11s} {'singmesh wall':>13s} {'cpu':>7s} {'mc wall':>8s} {'cpu':>7s} "
           f"{'ratio wall':>10s} {'ratio cpu':>9s} {'vertices':>8s} {'mc vertices':>11s}")
-    for name, text, box, expr in SURFACES:
-        f = sympy.lambdify(nodes.VARIABLES, expr, "numpy")
+    for name, text, box, mc_text in SURFACES:
         singmesh.mesh(text, box)  # warm-up (imports, caches)
-        marching_cubes(f, box, res)
+        marching_cubes(mc_text, box, res)
         sw, sc, mw, mcpu = [], [], [], []
         for _ in range(repeat):
             w, c, m = timed(lambda: singmesh.mesh(text, box))
             sw.append(w), sc.append(c)
-            w, c, nv = timed(lambda: marching_cubes(f, box, res))
+            w, c, nv = timed(lambda: marching_cubes(mc_text, box, res))
             mw.append(w), mcpu.append(c)
         a, b = statistics.median(sw), statistics.median(mw)
         ac, bc = statistics.median(sc), statistics.median(mcpu)
