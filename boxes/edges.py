@@ -68,22 +68,81 @@ class Events:
     def on_segments(self, axis, u, v, start, end):
         """Events on axis-parallel lattice segments ``[start, end)``.
 
+        The same as ``searchsorted`` of the segments' ends in ``cell_key``,
+        without its random look-ups: a line carries a few events (a
+        polynomial's line meets F = 0 at most degree times), so the events
+        of a segment's line below its start and end are counted in a few
+        stacked steps.  Segments on lines with many events (periodic
+        surfaces) are looked up with ``searchsorted``.
+
         Returns
         -------
         seg : (K,) int64   index of the segment each event lies on
         ev : (K,) int64    event index
         """
-        q = line_keys(axis, u, v)
-        ids = np.minimum(np.searchsorted(self.line_keys, q), max(len(self.line_keys) - 1, 0))
-        ids = np.where((len(self.line_keys) > 0) & (self.line_keys[ids] == q), ids, -1)
-        lo = np.searchsorted(self.cell_key, ids * _LINE_STRIDE + start, side="left")
-        hi = np.searchsorted(self.cell_key, ids * _LINE_STRIDE + end, side="left")
-        hi = np.where(ids < 0, lo, hi)
-        counts = hi - lo
+        axis, u, v, start, end = (np.asarray(a, np.int64) for a in (axis, u, v, start, end))
+        ids = self.line_ids(axis, u, v)
+        n_lines = len(self.line_keys)
+        # The events of line l are cell_key[bounds[l]:bounds[l + 1]]: their
+        # keys l * stride + cell lie in [l * stride - 1, l * stride + top]
+        # (a snapped event at 0 on its - side is in cell -1).
+        bounds = np.searchsorted(self.cell_key, np.arange(n_lines + 1, dtype=np.int64) * _LINE_STRIDE - 1)
+        valid = ids >= 0
+        line = np.where(valid, ids, 0)
+        lo = bounds[line]
+        n_ev = np.where(valid, bounds[line + 1] - lo, 0)
+        hi = lo.copy()
+        k_lo = line * _LINE_STRIDE + start
+        k_hi = line * _LINE_STRIDE + end
+        many = n_ev > _FEW_EVENTS
+        if many.any():
+            lo[many] = np.searchsorted(self.cell_key, k_lo[many], side="left")
+            hi[many] = np.searchsorted(self.cell_key, k_hi[many], side="left")
+        act = np.nonzero((n_ev > 0) & ~many)[0]
+        j = 0
+        while len(act):
+            key = self.cell_key[bounds[line[act]] + j]
+            lo[act] += key < k_lo[act]
+            hi[act] += key < k_hi[act]
+            j += 1
+            act = act[n_ev[act] > j]
+        counts = np.where(valid, hi - lo, 0)
         seg = np.repeat(np.arange(len(counts)), counts)
         first = np.repeat(lo - np.cumsum(counts) + counts, counts)
         ev = first + np.arange(counts.sum())
         return seg, ev
+
+    def line_ids(self, axis, u, v) -> np.ndarray:
+        """Index into ``lines`` of the lines (axis, u, v), -1 where none.
+
+        A dense table over the lattice's (axis, u, v) when it is small (a
+        gather instead of a binary search per query), else ``searchsorted``
+        in ``line_keys``.
+        """
+        axis, u, v = (np.asarray(a, np.int64) for a in (axis, u, v))
+        n_lines = len(self.line_keys)
+        if n_lines == 0:
+            return np.full(axis.shape, -1, np.int64)
+        lo = min(int(u.min(initial=0)), int(v.min(initial=0)))
+        m = max(int(self.lines[:, 1:].max()), int(u.max(initial=0)), int(v.max(initial=0))) + 1
+        if lo >= 0 and 3 * m * m <= _DENSE_LINES:
+            table = np.full(3 * m * m, -1, np.int32)
+            table[(self.lines[:, 0] * m + self.lines[:, 1]) * m + self.lines[:, 2]] = np.arange(n_lines)
+            return table[(axis * m + u) * m + v].astype(np.int64)
+        q = line_keys(axis, u, v)
+        ids = np.minimum(np.searchsorted(self.line_keys, q), n_lines - 1)
+        return np.where(self.line_keys[ids] == q, ids, -1)
+
+
+#: Lines with more events than this are looked up by binary search in
+#: :meth:`Events.on_segments` (a polynomial line has at most 2 * degree).
+_FEW_EVENTS = 16
+#: Largest dense (axis, u, v) table of :meth:`Events.line_ids` and of the
+#: lines of the leaf edges (entries; 16 MB of int32): lattices up to 1024
+#: boxes per axis.
+_DENSE_LINES = 1 << 22
+#: Largest table of flags (bytes) for the distinct values of keys in a range.
+_DENSE_KEYS = 1 << 25
 
 
 def line_keys(axis, u, v) -> np.ndarray:
@@ -109,11 +168,9 @@ def leaf_edges(tree: Octree):
 def compute_events(surface: Surface, tree: Octree) -> Events:
     """Crossing events of F + eps on every lattice line carrying leaf edges."""
     edges = leaf_edges(tree)
-    keys = line_keys(edges[:, 0], edges[:, 1], edges[:, 2])
-    uniq, inverse = np.unique(keys, return_inverse=True)
+    m = (1 << tree.fine_level) + 1  # lattice coordinates 0 .. 2**fine_level
+    uniq, inverse, lines = _lines_of(edges, m)
     n_lines = len(uniq)
-    lines = np.zeros((n_lines, 3), np.int64)
-    lines[inverse] = edges[:, :3]
     lo = np.full(n_lines, np.iinfo(np.int64).max)
     hi = np.full(n_lines, np.iinfo(np.int64).min)
     np.minimum.at(lo, inverse, edges[:, 3])
@@ -121,13 +178,11 @@ def compute_events(surface: Surface, tree: Octree) -> Events:
 
     # Lattice points at which F is zero: candidates for snapping.  Every
     # leaf corner is an end point of leaf edges on all three lines through it.
-    ends = np.concatenate([edges[:, [0, 1, 2, 3]], edges[:, [0, 1, 2, 4]]])
-    # One int64 per (axis, u, v, s): np.unique on rows sorts lexically and is
-    # ten times slower.
-    b = tol.MAX_LEVEL + 1
-    packed = (ends[:, 0] << (3 * b)) | (ends[:, 1] << (2 * b)) | (ends[:, 2] << b) | ends[:, 3]
-    _, first = np.unique(packed, return_index=True)
-    corners = ends[first]
+    # One int64 per (line, s), sorted as the rows (axis, u, v, s) are (the
+    # lines are in the order of their keys): the distinct ones read back.
+    packed = np.concatenate([inverse, inverse]) * m + np.concatenate([edges[:, 3], edges[:, 4]])
+    packed = _distinct(packed, n_lines * m)
+    corners = np.concatenate([lines[packed // m], (packed % m)[:, None]], axis=1)
     zero_line, zero_pos = _zero_lattice_points(surface, tree, corners, uniq)
 
     cell = tree.cell
@@ -165,14 +220,56 @@ def _zero_lattice_points(surface, tree, corners, uniq):
     # A lattice point is a corner on up to three lines: F is read once there.
     b = tol.MAX_LEVEL + 1
     packed = (xyz[:, 0] << (2 * b)) | (xyz[:, 1] << b) | xyz[:, 2]
-    _, first, inverse = np.unique(packed, return_index=True, return_inverse=True)
-    zero = surface.is_zero(tree.lattice_to_space(xyz[first]))[inverse.ravel()]
+    distinct, inverse = np.unique(packed, return_inverse=True)
+    zero = surface.is_zero(tree.lattice_to_space(_unpack(distinct, 3, b)))[inverse.ravel()]
     xyz = xyz[zero]
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
     v = xyz[np.arange(len(a)), (a + 2) % 3]
     ids = np.searchsorted(uniq, line_keys(a, u, v))
     return ids, xyz[np.arange(len(a)), a]
+
+
+def _distinct(keys: np.ndarray, bound: int) -> np.ndarray:
+    """The distinct values of a 1-D int64 array of values in [0, bound), sorted.
+
+    A table of ``bound`` flags when that is small (no sort), else a plain
+    sort (``np.unique`` would use a hash table, slower on many values).
+    """
+    if bound <= _DENSE_KEYS:
+        present = np.zeros(bound, bool)
+        present[keys] = True
+        return np.flatnonzero(present)
+    keys = np.sort(keys)
+    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if len(keys) else keys
+
+
+def _lines_of(edges: np.ndarray, m: int):
+    """The lattice lines carrying ``edges`` (axis, u, v, start, end) on a lattice of ``m`` points per axis.
+
+    Returns
+    -------
+    keys : (L,) int64   sorted :func:`line_keys`
+    inverse : (E,) int64 the line of each edge
+    lines : (L, 3) int64 (axis, u, v) of each line
+    """
+    dense = (edges[:, 0] * m + edges[:, 1]) * m + edges[:, 2]  # ordered as line_keys
+    if 3 * m * m <= _DENSE_LINES:
+        ids = _distinct(dense, 3 * m * m)
+        rank = np.zeros(3 * m * m, np.int32)
+        rank[ids] = np.arange(len(ids))
+        inverse = rank[dense].astype(np.int64)
+    else:
+        ids, inverse = np.unique(dense, return_inverse=True)
+        inverse = inverse.ravel()
+    lines = np.stack([ids // (m * m), ids // m % m, ids % m], axis=1)
+    return line_keys(lines[:, 0], lines[:, 1], lines[:, 2]), inverse, lines
+
+
+def _unpack(packed: np.ndarray, fields: int, bits: int) -> np.ndarray:
+    """Rows of ``fields`` non-negative ints of ``bits`` bits each, packed first field highest."""
+    mask = (np.int64(1) << bits) - 1
+    return np.stack([(packed >> (bits * (fields - 1 - i))) & mask for i in range(fields)], axis=1)
 
 
 def _corner_xyz(corners):

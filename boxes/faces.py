@@ -52,8 +52,12 @@ class FaceLinks:
     inconsistent: np.ndarray
 
 
-def contact_squares(tree: Octree):
+def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
     """Contact squares and, for each, a leaf and face index providing it.
+
+    With ``leaves`` (indices), only the squares that are a whole face of
+    one of them: all the squares between two of them (the smaller side of
+    a square is its whole face), and some more.
 
     Returns
     -------
@@ -61,23 +65,25 @@ def contact_squares(tree: Octree):
     owner : (Q,) int64       a leaf having the square as a whole face
     owner_side : (Q,) int64  0 if it is the owner's -n face, 1 if its +n face
     """
-    size = tree.size
+    leaves = np.arange(len(tree.level)) if leaves is None else np.asarray(leaves, np.int64)
+    size = tree.size[leaves]
+    level = tree.level[leaves]
+    corner = tree.corner[leaves]
     top = 1 << tree.fine_level
     rows, owners, sides = [], [], []
-    leaves = np.arange(len(size))
     for n in range(3):
         u, v = (n + 1) % 3, (n + 2) % 3
         for side in (0, 1):
-            other = tree.corner.copy()
+            other = corner.copy()
             other[:, n] += size if side else -size
             inside = (other[:, n] >= 0) & (other[:, n] < top)
-            keys = node_keys(tree.level, np.clip(other, 0, top - 1) >> (tree.fine_level - tree.level)[:, None])
+            keys = node_keys(level, np.clip(other, 0, top - 1) >> (tree.fine_level - level)[:, None])
             pos = np.minimum(np.searchsorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
             split = inside & (len(tree.internal) > 0) & (tree.internal[pos] == keys) if len(tree.internal) else np.zeros(len(size), bool)
             keep = ~split
             rows.append(np.stack([
-                np.full(keep.sum(), n), tree.corner[keep, n] + side * size[keep],
-                tree.corner[keep, u], tree.corner[keep, v], size[keep]], axis=1))
+                np.full(keep.sum(), n), corner[keep, n] + side * size[keep],
+                corner[keep, u], corner[keep, v], size[keep]], axis=1))
             owners.append(leaves[keep])
             sides.append(np.full(keep.sum(), side))
     rows = np.concatenate(rows)
@@ -194,7 +200,7 @@ def face_links(surface: Surface, tree: Octree, events: Events) -> FaceLinks:
     if retry.any():
         mode = np.where(retry, 2, mode)
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
-    minus, plus = _sides(tree, squares)
+    minus, plus = _sides(tree, squares, owner, owner_side)
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
 
@@ -213,22 +219,31 @@ class LeafSides:
     plus: np.ndarray
 
 
-def leaf_sides(tree: Octree) -> LeafSides:
-    """Contact squares and the leaves on their -n and +n sides (-1 where none)."""
-    squares, _, _ = contact_squares(tree)
-    minus, plus = _sides(tree, squares)
+def leaf_sides(tree: Octree, leaves: np.ndarray | None = None) -> LeafSides:
+    """Contact squares and the leaves on their -n and +n sides (-1 where none).
+
+    With ``leaves`` (indices), the squares of :func:`contact_squares` for
+    them: every pair of them sharing a face is among the sides, which is
+    all the adjacency among them (e.g. the leaves that failed the
+    simplicity test, which the stars grow along) at a fraction of the cost.
+    """
+    squares, owner, owner_side = contact_squares(tree, leaves)
+    minus, plus = _sides(tree, squares, owner, owner_side)
     return LeafSides(square=squares, minus=minus, plus=plus)
 
 
-def _sides(tree: Octree, squares):
-    """Leaves on the -n and +n sides of each square (-1 where none)."""
+def _sides(tree: Octree, squares, owner, owner_side):
+    """Leaves on the -n and +n sides of each square (-1 where none).
+
+    The owner (:func:`contact_squares`) is on one side, the side its face
+    looks in from; the leaf on the other side is looked up.
+    """
     n, plane, u0, v0, size = squares.T
-    centre = np.zeros((len(squares), 3), np.int64)
+    other = np.zeros((len(squares), 3), np.int64)
     r = np.arange(len(squares))
-    centre[r, (n + 1) % 3] = 2 * u0 + size
-    centre[r, (n + 2) % 3] = 2 * v0 + size
-    below = centre.copy()
-    above = centre.copy()
-    below[r, n] = 2 * plane - 1
-    above[r, n] = 2 * plane + 1
-    return tree.find_leaves(below), tree.find_leaves(above)
+    other[r, (n + 1) % 3] = 2 * u0 + size
+    other[r, (n + 2) % 3] = 2 * v0 + size
+    # The square's centre pushed half a cell off the face, away from the owner.
+    other[r, n] = np.where(owner_side == 0, 2 * plane - 1, 2 * plane + 1)
+    found = tree.find_leaves(other)
+    return np.where(owner_side == 0, found, owner), np.where(owner_side == 0, owner, found)

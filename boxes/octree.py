@@ -105,13 +105,15 @@ class Octree:
         order = np.argsort(keys)
         sorted_keys = keys[order]
         found = np.full(len(doubled), -1, dtype=np.int64)
-        for lvl in np.unique(self.level):
-            shift = self.fine_level - int(lvl) + 1
-            q = node_keys(np.full(len(doubled), lvl), doubled >> shift)
-            pos = np.searchsorted(sorted_keys, q)
-            pos = np.minimum(pos, len(sorted_keys) - 1)
-            hit = (sorted_keys[pos] == q) & (found < 0)
-            found[hit] = order[pos[hit]]
+        todo = np.arange(len(doubled))
+        for lvl in np.unique(self.level).tolist():
+            # Only the points no leaf of another level holds yet.
+            shift = self.fine_level - lvl + 1
+            q = node_keys(np.full(len(todo), lvl), doubled[todo] >> shift)
+            pos = np.minimum(np.searchsorted(sorted_keys, q), len(sorted_keys) - 1)
+            hit = sorted_keys[pos] == q
+            found[todo[hit]] = order[pos[hit]]
+            todo = todo[~hit]
         return found
 
 

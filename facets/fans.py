@@ -10,6 +10,7 @@ keep the cycle's orientation, so the fans agree with the rest of the mesh.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -31,8 +32,9 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
 
     Returns
     -------
-    polygons : list of (keys (k,), points (k, 3)); the first vertex is p
-        or a traced point (an inner vertex to fan from, if large)
+    polygons : (keys (S,), points (S, 3), sizes list of P ints)
+        The polygons one after the other; the first vertex of each is p or
+        a traced point (an inner vertex to fan from, if large)
     splits : dict
         ``(square, a, b) -> [(node_key, node_point), ...]`` for every cycle
         link a -> b (on that square) that received face nodes, in order
@@ -52,15 +54,20 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     # a spoke (skeleton link) meets it.
     keys, pts, spokes = [], [], []
     expanded = {}
+    ckeys = [int(k) for k in cycle_keys]
+    nodes_after: dict = {}  # the links ending on a new node, by the cycle link they cut, in order
+    for s in links:
+        if s.vertex is None:
+            nodes_after.setdefault(s.after, []).append(s)
     for i in range(m):
         expanded[i] = len(keys)
-        keys.append(int(cycle_keys[i]))
+        keys.append(ckeys[i])
         pts.append(cycle_points[i])
-        for s in (s for s in links if s.after == i and s.vertex is None):
+        for s in nodes_after.get(i, ()):
             node_key = next_key
             trace_keys = list(range(next_key + 1, next_key + 1 + len(s.trace)))
             next_key += 1 + len(s.trace)
-            a, b = int(cycle_keys[i]), int(cycle_keys[(i + 1) % m])
+            a, b = ckeys[i], ckeys[(i + 1) % m]
             sq = -1 if cycle_squares is None else int(cycle_squares[i])
             splits.setdefault((sq, a, b), []).append((node_key, s.node))
             spokes.append((len(keys), trace_keys, list(s.trace)))
@@ -80,7 +87,8 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         extra = (first + n // 2) % n
         spokes = sorted(spokes + [(first, [], [])] * (not spokes) + [(extra, [], [])])
     if n < 3 or len({a for a, _, _ in spokes}) < 2:
-        return [], splits, next_key  # a collapsed cycle: no area to fan
+        # A collapsed cycle: no area to fan.
+        return (np.zeros(0, np.int64), np.zeros((0, 3)), []), splits, next_key
     spokes = _narrow_sectors(spokes, p, keys, pts)
     # Traced points are for shape only: a spoke whose points make a flat
     # triangle with a neighbour's (two traces on one line of the skeleton)
@@ -96,34 +104,61 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
 def _sectors(spokes, p_key, p, keys, pts):
     """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
     n = len(keys)
-    polygons, flat = [], set()
-    for k, (at, tkeys, tpts) in enumerate(spokes):
-        nxt_at, nkeys, npts = spokes[(k + 1) % len(spokes)]
-        steps = (nxt_at - at) % n or n
+    flat = set()
+    # One table of the vertices: p, the cycle with its nodes, then each
+    # spoke's traced points; the triangles are rows of indices into it.
+    tab_k, tab_p, trace_at = [p_key] + list(keys), [p] + list(pts), []
+    for _, tkeys, tpts in spokes:
+        trace_at.append(list(range(len(tab_k), len(tab_k) + len(tkeys))))
+        tab_k += tkeys
+        tab_p += tpts
+    tab_k, tab_p = np.array(tab_k, np.int64), np.array(tab_p)
+    zips, tris = [], []
+    for k, (at, _, _) in enumerate(spokes):
+        nxt = (k + 1) % len(spokes)
         # Spoke A runs out from p to the cycle, spoke B back in from it.
-        a_keys = [p_key] + tkeys[::-1] + [keys[at]]
-        a_pts = [p] + tpts[::-1] + [pts[at]]
-        b_keys = [p_key] + nkeys[::-1] + [keys[nxt_at]]
-        b_pts = [p] + npts[::-1] + [pts[nxt_at]]
-        zipped = _zip_spokes(a_keys, a_pts, b_keys, b_pts)
-        for _, q in zipped:
-            e = [q[1] - q[0], q[2] - q[1], q[0] - q[2]]
-            area2 = np.linalg.norm(np.cross(e[0], -e[2]))
-            if area2 <= 1e-6 * max(np.dot(x, x) for x in e):
-                flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+        zipped = _zip_spokes([0] + trace_at[k][::-1] + [1 + at], [0] + trace_at[nxt][::-1] + [1 + spokes[nxt][0]],
+                             tab_p)
+        zips.append((len(tris), len(zipped)))
+        tris += zipped
+    tris = np.array(tris, np.int64)  # (T, 3)
+    tri_pts = tab_p[tris]            # (T, 3, 3)
+    # Flat triangles, all at once: twice the area against the longest
+    # edge squared (the same products as np.cross and np.linalg.norm of
+    # one vector: matmul of a row by a column is the BLAS dot product).
+    e = np.stack([tri_pts[:, 1] - tri_pts[:, 0], tri_pts[:, 2] - tri_pts[:, 1], tri_pts[:, 0] - tri_pts[:, 2]], 1)
+    c = np.cross(e[:, 0], -e[:, 2])
+    area2 = np.sqrt(np.matmul(c[:, None, :], c[:, :, None])[:, 0, 0])
+    longest = np.matmul(e[:, :, None, :], e[:, :, :, None])[:, :, 0, 0].max(axis=1)
+    is_flat = area2 <= 1e-6 * longest
+    out, sizes = [], []
+    for k, (at, tkeys, _) in enumerate(spokes):
+        nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
+        first, count = zips[k]
+        if is_flat[first:first + count].any():
+            flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+        steps = (nxt_at - at) % n or n
         # The outer part: the cycle from A's end to B's end.  It joins the
         # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
         # fanned from x, an inner vertex, when large.  Closed by the chord
         # alone, an arc along a flat sheet cut by one face of the star would
         # have no area.
         if steps >= 2:
-            last_keys, last_pts = zipped.pop()
+            count -= 1
+            last = tris[first + count].tolist()
             ends = (keys[at], keys[nxt_at])
-            x = next(i for i, k in enumerate(last_keys) if k not in ends)
-            polygons.append((np.array([last_keys[x]] + [keys[(at + j) % n] for j in range(steps + 1)], np.int64),
-                             np.array([last_pts[x]] + [pts[(at + j) % n] for j in range(steps + 1)])))
-        polygons += zipped
-    return polygons, flat
+            x = next(v for v in last if tab_k[v] not in ends)
+            out.append(np.array([x] + [1 + (at + j) % n for j in range(steps + 1)], np.int64))
+            sizes.append(steps + 2)
+        out.append(tris[first:first + count].reshape(-1))
+        sizes += [3] * count
+    out = np.concatenate(out)
+    return (tab_k[out], tab_p[out], sizes), flat
+
+
+def _length(v: np.ndarray) -> float:
+    """np.linalg.norm of one vector (the same square root of the same dot product), without its overhead."""
+    return math.sqrt(v.dot(v))
 
 
 def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angle: float = 2.0) -> list:
@@ -150,9 +185,9 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
             nxt = spokes[(k + 1) % len(spokes)]
             out.append(sp)
             u, w = first_point(sp) - p, first_point(nxt) - p
-            cos = np.dot(u, w) / max(np.linalg.norm(u) * np.linalg.norm(w), 1e-300)
+            cos = np.dot(u, w) / max(_length(u) * _length(w), 1e-300)
             steps = (nxt[0] - sp[0]) % n or n
-            if np.arccos(np.clip(cos, -1, 1)) > max_angle and steps >= 2:
+            if np.arccos(min(max(cos, -1.0), 1.0)) > max_angle and steps >= 2:
                 out.append(((sp[0] + steps // 2) % n, [], []))
                 changed = True
         spokes = out
@@ -161,27 +196,31 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
     return spokes
 
 
-def _zip_spokes(a_keys, a_pts, b_keys, b_pts) -> list:
+def _zip_spokes(a: list, b: list, points: np.ndarray) -> list:
     """Triangles between two spokes sharing their first vertex p.
 
-    Rings from p outwards, each step advancing on the spoke whose next
-    point gives the shorter diagonal: no triangle lies along one spoke,
-    so neighbouring sectors never pick the same sliver.
+    ``a`` and ``b`` are the spokes' vertices (indices into ``points``)
+    from p outwards.  Rings from p outwards, each step advancing on the
+    spoke whose next point gives the shorter diagonal: no triangle lies
+    along one spoke, so neighbouring sectors never pick the same sliver.
+
+    Returns
+    -------
+    list of [i, j, k] vertex indices
     """
-    tris = []
+    tris = [[a[0], a[1], b[1]]]
     i = j = 1
-    tris.append(([a_keys[0], a_keys[1], b_keys[1]], [a_pts[0], a_pts[1], b_pts[1]]))
-    while i < len(a_keys) - 1 or j < len(b_keys) - 1:
-        adv_a = j == len(b_keys) - 1 or (
-            i < len(a_keys) - 1
-            and np.linalg.norm(a_pts[i + 1] - b_pts[j]) <= np.linalg.norm(a_pts[i] - b_pts[j + 1]))
+    while i < len(a) - 1 or j < len(b) - 1:
+        adv_a = j == len(b) - 1 or (
+            i < len(a) - 1
+            and _length(points[a[i + 1]] - points[b[j]]) <= _length(points[a[i]] - points[b[j + 1]]))
         if adv_a:
-            tris.append(([a_keys[i], a_keys[i + 1], b_keys[j]], [a_pts[i], a_pts[i + 1], b_pts[j]]))
+            tris.append([a[i], a[i + 1], b[j]])
             i += 1
         else:
-            tris.append(([a_keys[i], b_keys[j + 1], b_keys[j]], [a_pts[i], b_pts[j + 1], b_pts[j]]))
+            tris.append([a[i], b[j + 1], b[j]])
             j += 1
-    return [(np.array(k, np.int64), np.array(q)) for k, q in tris]
+    return tris
 
 
 def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,

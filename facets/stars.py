@@ -31,7 +31,8 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     tree : Octree
-    links : FaceLinks or LeafSides (its ``minus``/``plus`` leaves give the adjacency)
+    links : FaceLinks or LeafSides (its ``minus``/``plus`` leaves give the adjacency;
+        only that among the leaves that failed the simplicity test is used)
     points : (k, 3) ndarray
 
     Returns

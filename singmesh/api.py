@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 import warnings
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -159,9 +160,10 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
-        # The stars grow along the leaves' adjacency alone: this tree's
-        # events and links would be replaced by the refined tree's.
-        cubes = star_cubes(tree, leaf_sides(tree), centres)
+        # The stars grow along the adjacency of the leaves that failed the
+        # simplicity test alone: this tree's events and links would be
+        # replaced by the refined tree's.
+        cubes = star_cubes(tree, leaf_sides(tree, np.nonzero(~tree.simple)[0]), centres)
     else:
         cubes = None
         events = compute_events(surf, tree)
@@ -197,8 +199,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
-    # Where two axis skeletons meet (normal along an axis), for reference.
-    nodes, node_axes = skeleton_nodes(surf, b, level=min(fine_level, tol.SKELETON_NODE_LEVEL))
+    # Where two axis skeletons meet (normal along an axis), for reference:
+    # the mesh does not use them, so they are found when first asked for.
+    node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
     singular = []
     for i, sp in enumerate(points):
         where = np.nonzero(vkeys == _point_key(i))[0]
@@ -225,7 +228,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
-             skeleton_nodes=nodes, skeleton_node_axes=node_axes, singular_curves=curve_list,
+             skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
              special_points=special, curve_graph=_curve_graph(curves, vkeys, curve_key0))
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
@@ -234,6 +237,17 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _skeleton_source(surf: Surface, box: np.ndarray, level: int):
+    """A function (picklable) finding the skeleton nodes as :func:`mesh` would."""
+    return partial(_find_skeleton_nodes, surf, box, level)
+
+
+def _find_skeleton_nodes(surf: Surface, box: np.ndarray, level: int):
+    """:func:`skeleton_nodes` with one BLAS thread and without warnings, as in :func:`mesh`."""
+    with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return skeleton_nodes(surf, box, level=level)
 
 
 def _why_empty(surface: Surface, box: np.ndarray) -> str:
@@ -280,14 +294,16 @@ def _point_key(i: int) -> int:
     return -1 - i
 
 
-def _square_bounds(tree, square):
-    """(axis, lo, hi) in space of a contact square row (n, plane, u0, v0, size)."""
-    n, plane, u0, v0, size = (int(c) for c in square)
-    lo = np.zeros(3, np.int64)
-    lo[n], lo[(n + 1) % 3], lo[(n + 2) % 3] = plane, u0, v0
+def _square_bounds_many(tree, squares: np.ndarray):
+    """(axis, lo, hi) in space of contact square rows (n, plane, u0, v0, size): (K,), (K, 3), (K, 3)."""
+    squares = np.asarray(squares, np.int64).reshape(-1, 5)
+    n, plane, u0, v0, size = squares.T
+    rows = np.arange(len(n))
+    lo = np.zeros((len(n), 3), np.int64)
+    lo[rows, n], lo[rows, (n + 1) % 3], lo[rows, (n + 2) % 3] = plane, u0, v0
     hi = lo.copy()
-    hi[(n + 1) % 3] += size
-    hi[(n + 2) % 3] += size
+    hi[rows, (n + 1) % 3] += size
+    hi[rows, (n + 2) % 3] += size
     return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
 
 
@@ -366,17 +382,28 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
     star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
+    # The face squares of all star cycles' links at once; the Hessian and
+    # the skeleton directions once per point (a node has two cycles).
+    spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
+    sq_axis, sq_lo, sq_hi = _square_bounds_many(
+        tree, links.square[np.concatenate([cycles.squares[a:b] for a, b in spans]) if spans else np.zeros(0, np.int64)])
+    directions = {}
     # The skeleton curves of all star cycles are traced in one batch.
     jobs = []
-    for c in star_cycles:
-        p = points[stars[cycles.box[c]]].point
-        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
-        squares = [_square_bounds(tree, links.square[q]) for q in cycles.squares[span]]
-        hess = surf.hessian(p)
-        # A tip (F not differentiable there) has no Hessian and no skeleton.
-        dirs = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
-        jobs.append((p, events.point[ev[span]], squares, dirs))
+    done = 0
+    for c, (a, b) in zip(star_cycles, spans):
+        i = stars[cycles.box[c]]
+        p = points[i].point
+        if i not in directions:
+            hess = surf.hessian(p)
+            # A tip (F not differentiable there) has no Hessian and no skeleton.
+            directions[i] = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
+        e = done + b - a
+        squares = list(zip(sq_axis[done:e].tolist(), sq_lo[done:e], sq_hi[done:e]))
+        done = e
+        jobs.append((p, events.point[ev[a:b]], squares, directions[i]))
     all_spokes = skeleton_links_many(surf, jobs)
+    star_keys, star_pts, star_sizes = [], [], []
     for c, spokes in zip(star_cycles, all_spokes):
         i = stars[cycles.box[c]]
         p = points[i].point
@@ -386,13 +413,17 @@ def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
         polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
                                                  cycle_squares=cycles.squares[span])
         splits.update(split)
-        for k, q in polys:
-            parts_sq.append(np.full(len(k), -1, np.int64))
-            parts_keys.append(k)
-            parts_pts.append(q)
-            parts_sizes.append([len(k)])
-            apex.append([True])  # large ones fan from their first vertex, p or a traced point
+        star_keys.append(polys[0])
+        star_pts.append(polys[1])
+        star_sizes += polys[2]
         branches[i] = branches.get(i, 0) + 1
+    if star_sizes:
+        # Large ones fan from their first vertex, p or a traced point.
+        parts_keys.append(np.concatenate(star_keys))
+        parts_pts.append(np.concatenate(star_pts))
+        parts_sq.append(np.full(sum(star_sizes), -1, np.int64))
+        parts_sizes.append(star_sizes)
+        apex.append(np.ones(len(star_sizes), bool))
     sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -52,6 +52,8 @@ class Mesh:
     skeleton_nodes : (j, 3) float64
         Points where F and two partial derivatives vanish but grad F does
         not: where the x-, y- and z-skeletons meet (isolated ones only).
+        Reference data the mesh does not use: found on first access (from
+        ``skeleton_source``), not while meshing.
     skeleton_node_axes : (j, 2) int64
         The two derivatives vanishing at each skeleton node.
     singular_curves : list of :class:`singmesh.skeleton.singular_curves.SingularCurve`
@@ -76,8 +78,9 @@ class Mesh:
     normals: np.ndarray = None
     singularities: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
-    skeleton_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-    skeleton_node_axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    #: Returns (skeleton_nodes, skeleton_node_axes) when first asked for.
+    skeleton_source: Callable[[], tuple[np.ndarray, np.ndarray]] | None = field(default=None, repr=False,
+                                                                                  compare=False)
     singular_curves: list = field(default_factory=list)
     special_points: list = field(default_factory=list)
     curve_graph: tuple = field(default_factory=lambda: (np.zeros((0, 3)), np.zeros((0, 2), np.int64),
@@ -88,6 +91,23 @@ class Mesh:
             g = self.surface.gradient(self.vertices) if len(self.vertices) else np.zeros((0, 3))
             norm = np.linalg.norm(g, axis=1, keepdims=True)
             self.normals = np.where(norm > 0, g / np.where(norm > 0, norm, 1), 0.0)
+
+    @property
+    def skeleton_nodes(self) -> np.ndarray:
+        return self._skeleton()[0]
+
+    @property
+    def skeleton_node_axes(self) -> np.ndarray:
+        return self._skeleton()[1]
+
+    def _skeleton(self) -> tuple[np.ndarray, np.ndarray]:
+        """The skeleton nodes and their axes, found once."""
+        cache = self.__dict__.get("_skeleton_cache")
+        if cache is None:
+            cache = self.skeleton_source() if self.skeleton_source is not None \
+                else (np.zeros((0, 3)), np.zeros((0, 2), np.int64))
+            self.__dict__["_skeleton_cache"] = cache
+        return cache
 
     @property
     def singular_points(self) -> np.ndarray:

@@ -140,6 +140,11 @@ def centre(surface: Surface, p: np.ndarray, reach: float,
     p = np.asarray(p, dtype=float)
     start = p.copy()
     first = analyse(surface, p)  # NotSingularError if p is not singular
+    frame = first[1]
+    if frame.corank == 0 and np.abs(frame.eigenvalues).min() > tol.CENTRE_RANK_RTOL * frame.scale:
+        # A node even to the loose rank test below: read loosely it is an
+        # A1 too, which has nothing to centre (the loop would stop at once).
+        return p, first[0], frame
     moved = False
     for _ in range(tol.CENTRE_STEPS):
         # Read the type with a loose rank test: off the centre of a D5 the

@@ -258,6 +258,9 @@ class Frame:
         cubic term is X^2 Y (D_k, k >= 5) or X^3 (E_k); the identity for D4.
     order : int
         Truncation order of the power series the type was read from.
+    scale : float
+        The largest Taylor coefficient of degree >= 2: the rank and jet
+        tolerances are relative to it.
     """
 
     basis: np.ndarray
@@ -265,6 +268,7 @@ class Frame:
     corank: int
     kernel: np.ndarray | None
     order: int
+    scale: float = 0.0
 
 
 def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
@@ -292,7 +296,7 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
     jet = _format_jet(T, CLASSIFY_JET_RTOL * S)
     common = dict(corank=corank, hessian_signature=signature, jet=jet,
                   point=tuple(float(c) for c in p))
-    frame = {"basis": vec, "eigenvalues": lam, "corank": corank, "kernel": None, "order": 0}
+    frame = {"basis": vec, "eigenvalues": lam, "corank": corank, "kernel": None, "order": 0, "scale": S}
 
     if corank == 0:
         return _a1(lam, vec, common), Frame(**frame)

@@ -71,6 +71,12 @@ def skeleton_links(surface: Surface, p: np.ndarray, cycle_points: np.ndarray, sq
 
 
 # ------------------------------------------------------------- all at once
+def _lengths(v: np.ndarray) -> np.ndarray:
+    """np.linalg.norm of each row of ``v`` (K, 3), with its bits: the square
+    root of the same BLAS dot product (matmul of a row by a column)."""
+    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None])[:, 0, 0])
+
+
 def _solve_stack(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Solve stacked systems a x = b; (x, ok), ok False where a is singular.
 
@@ -244,15 +250,13 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
         sizes = np.array([len(q) for q in pts])
         allp = np.concatenate(pts)
         g = np.einsum("ki,ki->k", surface.gradient(allp), np.repeat(np.array(vs), sizes, axis=0))
-        cyc, idx = [], []
-        start = 0
-        for j, m in enumerate(sizes.tolist()):
-            gi = g[start:start + m]
-            cross = np.nonzero(~(gi * np.roll(gi, -1) >= 0))[0]
-            cyc.extend([j] * len(cross))
-            idx.extend(cross.tolist())
-            start += m
-        cyc, idx = np.array(cyc, np.int64), np.array(idx, np.int64)
+        # All cycles at once: each vertex against the next one of its cycle.
+        starts = np.cumsum(sizes) - sizes
+        follow = np.arange(len(g)) + 1
+        follow[(starts + sizes - 1)[sizes > 0]] = starts[sizes > 0]
+        change = np.nonzero(~(g * g[follow] >= 0))[0]
+        cyc = (np.searchsorted(starts, change, side="right") - 1).astype(np.int64)
+        idx = (change - starts[cyc]).astype(np.int64)
         if len(cyc):
             a = np.array([pts[j][i] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
             b = np.array([pts[j][(i + 1) % sizes[j]] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
@@ -278,7 +282,8 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
             if not ok[k]:
                 continue
             c = active[j]
-            if any(np.linalg.norm(node[k] - s.node) <= near[k] for s in links[c] + found[j]):
+            seen = links[c] + found[j]
+            if seen and (_lengths(node[k] - np.array([s.node for s in seen])) <= near[k]).any():
                 continue  # two directions crossing the cycle at one point
             if not traced[k]:
                 continue

@@ -217,7 +217,8 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     along = _on_curve_many(surface, x, cell, steps=(4, 8))
     with np.errstate(all="ignore"):
         for p, on in zip(x, along.tolist()):
-            if any(np.linalg.norm(p - c) <= r for c, r in regions):
+            if regions and (_lengths(p - np.array([c for c, _ in regions]))
+                            <= np.array([r for _, r in regions])).any():
                 continue  # another start in the region of a point already centred
             if on:
                 # On a curve of singular points: not a point, and no need
@@ -248,9 +249,17 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
             found.append(SingularPoint(point=q, residual=r, hessian_rank=3 - kind.corank,
                                        signature=kind.hessian_signature, classification=kind))
     pts = _dedupe(np.array([s.point for s in found]).reshape(-1, 3), tol.SINGULAR_MERGE * size.max())
-    keep = [min(found, key=lambda s: np.linalg.norm(s.point - q)) for q in pts]
+    found_at = np.array([s.point for s in found]).reshape(-1, 3)
+    keep = [found[int(np.argmin(_lengths(found_at - q)))] for q in pts]
     keep.sort(key=lambda s: tuple(s.point))
     return keep, curve
+
+
+def _lengths(v: np.ndarray) -> np.ndarray:
+    """np.linalg.norm of each row of ``v`` (K, 3), with its bits: the square
+    root of the same BLAS dot product (a row times a column in matmul), not
+    of a sum along the axis."""
+    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None])[:, 0, 0])
 
 
 def _clumps(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -89,7 +89,9 @@ def mul(a: np.ndarray, b: np.ndarray, N: int, m: int | None = None) -> np.ndarra
         index, upper = _toeplitz_index(N + 1)
         Tb = b.reshape(N + 1)[index]
         Tb[upper] = 0.0
-        return np.tensordot(Tb, a, axes=(1, 0))
+        # np.tensordot(Tb, a, axes=(1, 0)) without its bookkeeping: the
+        # same matrix product on the same (N + 1, rest) view of a.
+        return np.dot(Tb, a.reshape(N + 1, -1)).reshape(a.shape)
     if m == 2 and a.ndim == 2 and b.ndim == 2 and a.shape == b.shape == (N + 1, N + 1):
         # Two variables: Kronecker substitution, rows laid out with stride
         # 2N + 1 so that one 1-D convolution is the 2-D one (no overlap).

@@ -205,3 +205,32 @@ def test_box_graph_is_a_union_of_cycles():
         expected = sorted(sorted(cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]].tolist())
                           for c in np.nonzero(cycles.box == box)[0])
         assert sorted(sorted(c) for c in nx.simple_cycles(g)) == expected
+
+
+@pytest.mark.parametrize("few, dense", [(16, 1 << 22), (0, 0)])
+def test_events_on_segments_by_brute_force(monkeypatch, few, dense):
+    # Every event of every lattice segment of the leaves, and no other:
+    # checked against each event's own line and position (floor of its
+    # place along the line, a snapped one a thousandth to its side), on
+    # the stacked look-up and on the binary-search one (few = 0, dense = 0).
+    import singmesh.boxes.edges as edges
+    from singmesh.boxes.octree import subdivide
+
+    monkeypatch.setattr(edges, "_FEW_EVENTS", few)
+    monkeypatch.setattr(edges, "_DENSE_LINES", dense)
+    s = singmesh.Surface.parse("x^4 - 5 x^2 + y^4 - 5 y^2 + z^4 - 5 z^2 + 11.8")
+    tree = subdivide(s, np.array([[-3, 3]] * 3, float), 3, 5)
+    events = edges.compute_events(s, tree)
+    seg = edges.leaf_edges(tree)
+    seg = np.concatenate([seg, [[0, 5, 7, 3, 9], [2, 40, 40, 0, 32]]])  # one more, and one off the lattice
+    got_seg, got_ev = events.on_segments(seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3], seg[:, 4])
+    got = set(zip(got_seg.tolist(), got_ev.tolist()))
+    cell = np.floor(events.pos + np.where(events.snapped, 1e-3 * events.side, 0.0)).astype(np.int64)
+    line = events.lines[events.line]
+    by_line = {}
+    for e, row in enumerate(line.tolist()):
+        by_line.setdefault(tuple(row), []).append(e)
+    cell = cell.tolist()
+    expected = {(k, e) for k, (a, u, v, lo, hi) in enumerate(seg.tolist())
+                for e in by_line.get((a, u, v), ()) if lo <= cell[e] < hi}
+    assert len(events.key) > 100 and len(got) > len(events.key) and got == expected
