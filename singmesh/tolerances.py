@@ -215,6 +215,13 @@ SINGULAR_LEVEL = 8
 TIP_NEWTON_STEPS = 30
 #: A tip's equations vanish to this much of (their Jacobian's size x the box).
 TIP_RESIDUAL = 1e-12
+#: A tip's kink is seen from TIP_PROBE of the box away (and twice that):
+#: F - F0 at least this much of the box above rounding, well inside the
+#: region where the root's own term dominates.
+TIP_PROBE = 1e-3
+#: ... where it grows by less than this factor from t to 2t (2 for a
+#: square root, 2^(2/3) for a cube root of squares; 4 for a smooth F).
+TIP_ORDER = 3.0
 
 #: Depth of the search for skeleton nodes (F and two derivatives zero).
 SKELETON_NODE_LEVEL = 6

@@ -11,8 +11,9 @@ of the squares):
 1. Candidate boxes: subdivide the box, keeping those where all the
    equations may vanish (interval bounds), ``level`` times.
 2. Gauss-Newton on the equations from each candidate's centre, all at
-   once; a start that ends on a common zero (to rounding) inside the box
-   is a tip.
+   once; a start that ends on a common zero (to rounding) inside the box,
+   where F - F0 grows like the root away from it (slower than t^2), is a
+   tip.
 3. Tips closer than ``SINGULAR_MERGE`` of the box are one.
 
 They are meshed as singular points are, with a star whose link cycles
@@ -69,6 +70,12 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
         ok = np.isfinite(x).all(axis=1) & (np.abs(r).max(axis=1) <= tol.TIP_RESIDUAL * scale)
         ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
         ok[ok] = surface.is_zero(x[ok]) | (np.abs(surface(x[ok])) <= tol.TIP_RESIDUAL * scale[ok])
+        # The root must make F non-differentiable there: F - F0 grows like
+        # the root (t, t^(2/3)) away from the point, not like t^2 (as
+        # cos(k sqrt(u)) - 1, analytic in u, on seed 000's cosine bump,
+        # whose axis point is a smooth or ADE point of its own).
+        if ok.any():
+            ok[ok] = _kinked(surface, system, x[ok], tol.TIP_PROBE * float(size.max()))
         found.append(x[ok])
         names += [system.name] * int(ok.sum())
     if not found or not sum(len(f) for f in found):
@@ -87,3 +94,15 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
         out.append(SingularPoint(point=p, residual=float(abs(surface(p[None])[0])), hessian_rank=0,
                                  signature=(0, 0, 3), classification=kind))
     return out
+
+
+def _kinked(surface: Surface, system, x: np.ndarray, t: float) -> np.ndarray:
+    """(k,) bool: F - F0 at distance t and 2t from the points x grows slower than quadratically."""
+    e = np.concatenate([np.eye(3), -np.eye(3)])
+    size = []
+    for step in (t, 2.0 * t):
+        p = (x[:, None, :] + step * e[None]).reshape(-1, 3)
+        d = surface(p) - system.values(p)[0][:, 0]
+        size.append(np.nanmax(np.abs(d).reshape(len(x), 6), axis=1))
+    d1, d2 = size
+    return (d1 > 0) & (d2 < tol.TIP_ORDER * d1)
