@@ -168,6 +168,15 @@ POLES = [
     ("log(x) + y", lambda x, y, z: np.log(x) + y),
     ("tan(3 x) + y", lambda x, y, z: np.tan(3 * x) + y),
     ("x^(1/3) - y", lambda x, y, z: np.where(x >= 0, np.abs(x) ** (1 / 3), np.nan) - y),
+    # inverse functions: asin's domain ends inside the box (the sheet with
+    # it, at x = +-2/3), acosh's (x = 1/3), atanh's poles (x = +-1/2)
+    ("asin(1.5 x) - y", lambda x, y, z: np.arcsin(1.5 * x) - y),
+    ("acosh(3 x) - y", lambda x, y, z: np.arccosh(3 * x) - y),
+    ("atanh(2 x) - y", lambda x, y, z: np.arctanh(2 * x) - y),
+    ("acos(x) - atan(y) - 1.3 + z", lambda x, y, z: np.arccos(x) - np.arctan(y) - 1.3 + z),
+    # the domain ends on the box face x = 1, where the derivative is
+    # infinite: lattice points there are no roots (F = -0.3 at (1, -1, 0))
+    ("sqrt(1 - x) + z - 0.5 - 0.3 y", lambda x, y, z: np.sqrt(1 - x) + z - 0.5 - 0.3 * y),
 ]
 
 
@@ -233,3 +242,46 @@ def test_node_of_a_function_in_general_position(seed):
     assert oracles.branches_on_sphere(lambda p: f(p[..., 0], p[..., 1], p[..., 2]), node, 0.05) == 2
     assert mc.boundary_edges_off_box(m.vertices, m.faces, np.array(B1)) == []
     assert mc.non_manifold_edges(m.faces) == []
+
+
+# ------------------------------------------------------------ inverse functions
+def _rotated(seed):
+    """Three rotated, shifted coordinates as text (15-digit float matrix) and as numpy code."""
+    q = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
+    shift = np.array([0.0123456789, -0.0345678901, 0.0234567891])
+    rows = ["(" + " + ".join(f"({q[i, j]:.15f})*{v}" for j, v in enumerate("xyz")) + f" + ({shift[i]:.10f}))"
+            for i in range(3)]
+    qr = np.array([[float(f"{q[i, j]:.15f}") for j in range(3)] for i in range(3)])
+    return rows, lambda x, y, z: qr @ np.stack([x, y, z]) + shift[:, None]
+
+
+@pytest.mark.parametrize("which", ["atan", "asin-domain-edge"])
+def test_inverse_functions_in_general_position(which):
+    # A closed atan/asinh surface, and a sphere written with asin whose
+    # zero (r^2 = 0.5 + sin 1.5) lies 0.001 inside asin's domain
+    # (r^2 <= 1.5: F is undefined beyond): both rotated by a float matrix
+    # and shifted off the split planes; closed, on the surface, a sphere's
+    # Euler characteristic.
+    (u, v, w), uvw = _rotated(3)
+    if which == "atan":
+        text = f"atan(4*({u}^2 + 2*{v}^2 + {w}^2 - 0.6)) + 0.3*asinh({u}*{w}) - 0.2"
+
+        def f(x, y, z):
+            a, b, c = uvw(x, y, z)
+            return np.arctan(4 * (a * a + 2 * b * b + c * c - 0.6)) + 0.3 * np.arcsinh(a * c) - 0.2
+        m = singmesh.mesh(text, B15)
+    else:
+        text = f"asin({u}^2 + {v}^2 + {w}^2 - 0.5) - 1.5"
+
+        def f(x, y, z):
+            a, b, c = uvw(x, y, z)
+            with np.errstate(invalid="ignore"):
+                return np.arcsin(a * a + b * b + c * c - 0.5) - 1.5
+        # (every box along the domain's edge is subdivided to the fine level)
+        m = singmesh.mesh(text, B15, coarse=8, fine=32)
+    assert len(m.faces) > 500 and np.isfinite(m.vertices).all()
+    g = np.linalg.norm(_grad(f, m.vertices, 1e-8), axis=1)
+    assert (np.abs(f(*m.vertices.T)) / g).max() <= 1e-10 * 3
+    assert mc.boundary_edges(m.faces) == [] and mc.non_manifold_edges(m.faces) == []
+    assert mc.euler(m.vertices, m.faces) == 2 and mc.components(m.faces) == 1
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
