@@ -31,6 +31,8 @@ from dataclasses import replace
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
@@ -371,6 +373,38 @@ def crease_curves(surface: Surface, box, step: float, level: int | None = None) 
                 lines[k][1] = np.vstack([p[:-1] if near else p, x[None]])
     lines = _densify(systems, [(s, p, c, tuple(how)) for s, p, c, how, _ in lines], tol.CREASE_TRACE_STEP)
     return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
+
+
+def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int) -> float:
+    """The smallest distance (max norm, fine cells) between two points of the creases that are apart.
+
+    Two vertices of the curve graph are apart when the way between them
+    along the graph is more than ``CREASE_GAP_DETOUR`` times their distance
+    (two creases, or two stretches of one; not two creases near the corner
+    where they meet).  ``inf`` when no such pair is closer than
+    ``CREASE_MIN_GAP`` cells.
+    """
+    n = len(curves.points)
+    if n < 2:
+        return float("inf")
+    box = np.asarray(box, dtype=float)
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    p = curves.points / cell
+    pairs = cKDTree(p).query_pairs(tol.CREASE_MIN_GAP, p=np.inf, output_type="ndarray")
+    if len(pairs) == 0:
+        return float("inf")
+    d = np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
+    e = curves.edges
+    # (+1e-9: csgraph drops explicit zero weights, as two coincident vertices)
+    w = np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) + 1e-9
+    graph = coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    src, inv = np.unique(pairs[:, 0], return_inverse=True)
+    limit = tol.CREASE_GAP_DETOUR * tol.CREASE_MIN_GAP * np.sqrt(3.0)
+    way = dijkstra(graph, directed=False, indices=src, limit=limit)[inv.reshape(-1), pairs[:, 1]]
+    apart = way > tol.CREASE_GAP_DETOUR * d
+    if not apart.any():
+        return float("inf")
+    return float(np.abs(p[pairs[apart, 0]] - p[pairs[apart, 1]]).max(axis=1).min())
 
 
 def _join_on_box(surface: Surface, curves: CurveSet, box: np.ndarray, step: float) -> CurveSet:

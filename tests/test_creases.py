@@ -19,7 +19,7 @@ from scipy.sparse.csgraph import connected_components
 import singmesh
 
 X, Y, Z = sp.symbols("x y z", real=True)
-LOC = {"x": X, "y": Y, "z": Z, "Max": sp.Max, "Min": sp.Min, "Abs": sp.Abs}
+LOC = {"x": X, "y": Y, "z": Z, "Max": sp.Max, "Min": sp.Min, "Abs": sp.Abs, "sqrt": sp.sqrt}
 SPH = "(x**2+y**2+z**2-1)"
 
 
@@ -223,3 +223,38 @@ def test_inactive_kinks_make_no_crease():
     # ... while the tie of |x| and |y| on the surface is one, and the corner is on three.
     assert len(creases_at(np.array([[0.7, -0.7, 0.1]]))) == 1
     assert len(creases_at(np.array([[0.7, -0.7, 0.7]]))) == 3
+
+
+def test_close_creases_raise_the_fine_level():
+    # A cube with a cylindrical hole whose rims pass 0.21 from the cube's
+    # edges: 6.6 fine cells at fine = 64, where the two creases' tubes
+    # merge and the strip of the top face between them is lost (open and
+    # non-manifold edges).  The fine level is raised until they are
+    # CREASE_MIN_GAP cells apart, and the mesh is right.
+    r, cx, cy = 0.4687654321, 0.0123456789, -0.0234567891
+    hole = f"((x-{cx})**2+(y-({cy}))**2)"
+    eq = f"Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, {r} - sqrt({hole}))"
+    box = np.array([[-1.0, 1.0]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
+    assert m.stats["fine"] == 128 and 12 <= m.stats["crease_gap"] < 24
+    pairs = CUBE_PAIRS + [(f"z{s}0.7", f"{hole}-{r}**2") for s in "+-"]
+    V, T = m.vertices, m.faces
+    size = 2.0
+    on = _on_crease(V, pairs, 1e-10 * size)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
+    near = length <= 4 * size / 128
+    crease_edges, counts = edges[sel][near], cnt[sel][near]
+    samples = crease_points(eq, pairs, box, starts=1400)
+    assert len(samples) > 100
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    sagitta = float(length[near].max()) ** 2 / (8 * r) * 1.01
+    assert d.max() <= sagitta + 1e-9 * size, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+    assert np.linalg.norm(V[None] - CUBE_CORNERS[:, None], axis=2).min(axis=1).max() <= 1e-12 * size
+    # Closed, of genus 1 (the checks for a sphere's closed=True aside).
+    _check_mesh(m, eq, box, closed=False)
+    assert (cnt == 1).sum() == 0 and (cnt > 2).sum() == 0
+    assert len(np.unique(T)) - len(edges) + len(T) == 0
+    assert m.stats["creases"] == 14
