@@ -784,9 +784,13 @@ class _Kink(CreaseSystem):
     def active(self, points):
         p = np.asarray(points, float).reshape(-1, 3)
         g = self._s._graph
-        (fv,), (fm,) = point_eval(g, [self._s._f], p, magnitude=True)
-        # On the crease F = G1 (the tie): F at rounding level of its terms.
-        ok = np.abs(fv) <= tol.CREASE_RESIDUAL * np.maximum(fm, 1e-300)
+        (fv, *grad), (fm, *_) = point_eval(g, [self._s._f] + self._s._grad, p, magnitude=True)
+        # On the crease F = G1 (the tie): F at rounding level of its terms,
+        # or of its gradient times the point's scale (as Newton's test):
+        # on z - y |x|'s crease x = z = 0 every term of F vanishes, and a
+        # point 1e-17 off it has F = 3e-18 with terms of the same size.
+        size = np.linalg.norm(np.stack(grad, 1), axis=1) * np.maximum(np.abs(p).max(axis=1), 1.0)
+        ok = np.abs(fv) <= tol.CREASE_RESIDUAL * np.maximum(np.fmax(fm, size), 1e-300)
         if self._tie:
             vals = point_eval(g, list(self._tie), p, magnitude=True)
             a, ma = vals[0][0], vals[1][0]
