@@ -31,7 +31,16 @@ outside the domain is empty (``excludes_zero`` is True).  Division by an
 interval holding 0 (a pole) gives infinite bounds: such boxes are never
 excluded nor simple, and a sign change of F across a pole is not a root
 (``line_roots`` keeps only roots where |F| is at rounding level relative
-to its terms).  The surface may therefore end where F's domain ends (the
+to its terms).  Where the surface runs into a pole (x / y = 0, the plane
+x = 0, meets the pole y = 0 along the line x = y = 0, where F = 0 / 0),
+the boxes that touch the pole are subdivided to the fine level and hold
+no vertex on it: F is infinite or undefined on their faces in the pole,
+so the mesh ends on the lattice edges of the last fine boxes before it,
+with a boundary there (open edges): one fine cell from the pole when it
+lies on a split plane (x / y: on y = +-cell), a few cells in general
+position (measured: (x - 0.3 y + 0.0123456) / (y - 0.0234567 + 0.1 z)
+- 0.25 ends 0.05 to 9 cells from its pole at fine 256, 0.05 to 1.5 at
+64).  The vertices are on the surface; the pole's line is not meshed.  The surface may therefore end where F's domain ends (the
 mesh then has a boundary there); :meth:`ElementarySurface.undefined_on`
 names a subexpression that is undefined somewhere on given boxes, for a
 caller that prefers an error.

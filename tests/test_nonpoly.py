@@ -285,3 +285,23 @@ def test_inverse_functions_in_general_position(which):
     assert mc.boundary_edges(m.faces) == [] and mc.non_manifold_edges(m.faces) == []
     assert mc.euler(m.vertices, m.faces) == 2 and mc.components(m.faces) == 1
     assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+
+
+def test_surface_ends_one_fine_cell_before_a_pole_on_a_split_plane():
+    # The documented treatment of poles (singmesh/elementary.py): x / y = 0
+    # is the plane x = 0 cut by the pole y = 0; the mesh has a boundary on
+    # the lattice lines y = +-cell next to it, and nowhere else off the box.
+    box = np.array(B1)
+    for fine in (32, 64):
+        m = singmesh.mesh("x / y", B1, coarse=16, fine=fine)
+        cell = 2.0 / fine
+        assert np.abs(m.vertices[:, 0]).max() == 0.0
+        assert np.abs(m.vertices[:, 1]).min() == cell    # no vertex nearer the pole
+        edges = np.array(mc.boundary_edges_off_box(m.vertices, m.faces, box))
+        assert len(edges) > 0
+        assert np.all(np.abs(np.abs(m.vertices[edges.ravel(), 1]) - cell) <= 1e-15)
+        # the rest of the plane x = 0 in the box is covered: area 2 x (2 - 2 cell)
+        v = m.vertices[m.faces]
+        area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum()
+        assert abs(area - 2.0 * (2.0 - 2.0 * cell)) <= 1e-12
+        assert mc.non_manifold_edges(m.faces) == []
