@@ -97,9 +97,9 @@ STAR_MAX_RAISE = 4
 #: Two creases (or two stretches of one) closer than this many fine cells
 #: (max norm) share one tube (radius CURVE_TUBE_RADIUS + CURVE_TUBE_GROW
 #: = 5.5 cells around each): the piece of surface between them then has
-#: no rail and is lost (a cube with a cylindrical hole 0.1 from its edges:
-#: open edges at 6.4 cells, right at 12.8).  The fine level is doubled
-#: until they are this far apart ...
+#: no rail and is lost (a cube with a cylindrical hole near its edges:
+#: open edges at 6.4, 7.4, 8.4 and 9.4 cells, none at 10.2, 11.0, 12.8).
+#: The fine level is doubled until they are this far apart ...
 CREASE_MIN_GAP = 12.0
 
 #: ... at most this many levels (8 times finer); closer creases keep the
