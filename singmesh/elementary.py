@@ -33,14 +33,13 @@ excluded nor simple, and a sign change of F across a pole is not a root
 (``line_roots`` keeps only roots where |F| is at rounding level relative
 to its terms).  Where the surface runs into a pole (x / y = 0, the plane
 x = 0, meets the pole y = 0 along the line x = y = 0, where F = 0 / 0),
-the boxes that touch the pole are subdivided to the fine level and hold
-no vertex on it: F is infinite or undefined on their faces in the pole,
-so the mesh ends on the lattice edges of the last fine boxes before it,
-with a boundary there (open edges): one fine cell from the pole when it
-lies on a split plane (x / y: on y = +-cell), a few cells in general
-position (measured: (x - 0.3 y + 0.0123456) / (y - 0.0234567 + 0.1 z)
-- 0.25 ends 0.05 to 9 cells from its pole at fine 256, 0.05 to 1.5 at
-64).  The vertices are on the surface; the pole's line is not meshed.  The surface may therefore end where F's domain ends (the
+the boxes that touch the pole hold no vertex on it (F is infinite or
+undefined on their faces there); instead, with F = N / D over a common
+denominator (sympy's ``together``), the curve N = D = 0 is traced as a
+crease (:meth:`ElementarySurface.crease_systems`, "pole line") and the
+half-sheets on both sides of the pole are zipped to it by the tubes: the
+mesh ends exactly on the pole line (its vertices there have F = 0 / 0,
+NaN, and a zero normal).  The surface may therefore end where F's domain ends (the
 mesh then has a boundary there); :meth:`ElementarySurface.undefined_on`
 names a subexpression that is undefined somewhere on given boxes, for a
 caller that prefers an error.
@@ -512,7 +511,10 @@ class ElementarySurface(Surface):
         A Max or Min node with arguments a_1 ... a_k gives, for each pair
         i < j, G1 = F with the node replaced by a_i and G2 = a_i - a_j;
         an Abs node of a: G1 = F with the node replaced by a, G2 = a; an
-        R-function f + g +- sqrt(f^2 + g^2): G1 = f, G2 = g.
+        R-function f + g +- sqrt(f^2 + g^2): G1 = f, G2 = g; and where F has
+        poles, F = N / D over a common denominator: G1 = N, G2 = D (the
+        pole line, where the surface runs into a pole; not a kink, but
+        meshed as one: the mesh ends on it).
         """
         if getattr(self, "_crease_systems", None) is None:
             g, f = self._graph, self._f
@@ -532,8 +534,34 @@ class ElementarySurface(Surface):
             for k in self._creases:
                 fa, ga = g.args[k][:2]
                 out.append(_Kink(self, "R-function crease", fa, ga, None, (), "rfun"))
+            pole = self._pole_line()
+            if pole is not None:
+                out.append(pole)
             self._crease_systems = out
         return self._crease_systems
+
+    def _pole_line(self):
+        """The curve where the surface runs into a pole of F = N / D, as a crease system (N, D), or None.
+
+        The surface N = 0 meets the pole D = 0 along N = D = 0, where F is
+        0 / 0: meshed as a crease there (the half-sheets on the two sides
+        of the pole zipped to it), the mesh ends on the pole line instead of
+        a few fine cells short of it.
+        """
+        if not self._poles:
+            return None
+        try:
+            num, den = sympy.fraction(sympy.together(self.expr))
+        except (TypeError, ValueError):  # pragma: no cover - sympy cannot combine it
+            return None
+        if not den.free_symbols or not num.free_symbols:
+            return None
+        g = self._graph
+        try:
+            n, d = g.from_sympy(num), g.from_sympy(den)
+        except SurfaceError:
+            return None
+        return _Kink(self, "pole line", n, d, None, (), "pole")
 
     def undefined_on(self, data: np.ndarray):
         """A subexpression of F undefined somewhere on one of the boxes, or None.
@@ -793,6 +821,10 @@ class _Kink(CreaseSystem):
     def active(self, points):
         p = np.asarray(points, float).reshape(-1, 3)
         g = self._s._graph
+        if self._op == "pole":
+            # N = D = 0 (Newton put the point there): the surface meets the pole.
+            v, _ = self.values(p)
+            return np.isfinite(v).all(axis=1)
         (fv, *grad), (fm, *_) = point_eval(g, [self._s._f] + self._s._grad, p, magnitude=True)
         # On the crease F = G1 (the tie): F at rounding level of its terms,
         # or of its gradient times the point's scale (as Newton's test):
