@@ -35,7 +35,7 @@ to its terms).  Where the surface runs into a pole (x / y = 0, the plane
 x = 0, meets the pole y = 0 along the line x = y = 0, where F = 0 / 0),
 the boxes that touch the pole hold no vertex on it (F is infinite or
 undefined on their faces there); instead, with F = N / D over a common
-denominator (sympy's ``together``), the curve N = D = 0 is traced as a
+denominator (sympy's ``cancel``), the curve N = D = 0 is traced as a
 crease (:meth:`ElementarySurface.crease_systems`, "pole line") and the
 half-sheets on both sides of the pole are zipped to it by the tubes: the
 mesh ends exactly on the pole line (its vertices there have F = 0 / 0,
@@ -551,7 +551,9 @@ class ElementarySurface(Surface):
         if not self._poles:
             return None
         try:
-            num, den = sympy.fraction(sympy.together(self.expr))
+            # cancel: a common factor of N and D (x^2 - y^2 over x - y) would
+            # make N = D = 0 a surface, not a line.
+            num, den = sympy.fraction(sympy.cancel(sympy.together(self.expr)))
         except (TypeError, ValueError):  # pragma: no cover - sympy cannot combine it
             return None
         if not den.free_symbols or not num.free_symbols:
@@ -822,9 +824,12 @@ class _Kink(CreaseSystem):
         p = np.asarray(points, float).reshape(-1, 3)
         g = self._s._graph
         if self._op == "pole":
-            # N = D = 0 (Newton put the point there): the surface meets the pole.
-            v, _ = self.values(p)
-            return np.isfinite(v).all(axis=1)
+            # N = D = 0 (Newton put the point there) on a curve (grad N and
+            # grad D apart): the surface meets the pole there.
+            v, d = self.values(p)
+            cross = np.linalg.norm(np.cross(d[:, 0], d[:, 1]), axis=1)
+            size = np.linalg.norm(d[:, 0], axis=1) * np.linalg.norm(d[:, 1], axis=1)
+            return np.isfinite(v).all(axis=1) & (cross > tol.CREASE_JUMP * size)
         (fv, *grad), (fm, *_) = point_eval(g, [self._s._f] + self._s._grad, p, magnitude=True)
         # On the crease F = G1 (the tie): F at rounding level of its terms,
         # or of its gradient times the point's scale (as Newton's test):

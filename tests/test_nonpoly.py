@@ -319,3 +319,10 @@ def test_surface_ends_on_a_pole_line():
         area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum()
         if text == "x / y":
             assert abs(area - 4.0) <= 1e-12
+    # N / D with a common factor: N = D = 0 is the plane x = y, not a line;
+    # cancelled, there is no pole line (traced, it was a plane of creases:
+    # 358 non-manifold edges).
+    from singmesh.elementary import ElementarySurface
+
+    assert ElementarySurface.parse("(x^2 - y^2) / (x - y) - 0.3").crease_systems() == []
+    assert [c.name for c in ElementarySurface.parse("x / y").crease_systems()] == ["pole line"]
