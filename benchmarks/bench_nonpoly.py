@@ -14,6 +14,16 @@ Run from the repository root, BLAS on one thread::
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_nonpoly.py [--repeat 3] [--only gyroid,torus]
 
 This is a benchmark that prints figures, not a test.
+
+Figures of the rows added with the inverse functions and close creases
+(``--repeat 1``, a shared 2-core machine at load 8: CPU seconds are the
+comparable ones)::
+
+    surface                  wall s    cpu s  vertices  creases  fine mc 128^3 s
+    atan-blob                  0.36     0.18      1142        0   256       0.86
+    asin-domain-edge          12.60     6.14    205710        0   256       0.14
+    cube-hole-0.1              9.31     4.58     43452       14   256       0.38
+    cube-hole-0.05            25.64    12.69    114614       14   512       0.37
 """
 
 from __future__ import annotations
@@ -44,6 +54,15 @@ SURFACES = [
     ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}^2 + z^2)", B15),
     ("cube-max", "Max(Abs(x), Abs(y), Abs(z)) - 0.7", ((-1.0, 1.0),) * 3),
     ("sine-cone", "sin(x)^2 + sin(y)^2 - sin(z)^2", ((-1.0, 1.0),) * 3),
+    # inverse functions: a closed atan/asinh surface, and a sphere 0.001
+    # inside asin's domain (every box along the domain's edge goes to the
+    # fine level: no box partly outside the domain is simple)
+    ("atan-blob", "atan(4*(x^2 + 2*y^2 + z^2 - 0.6)) + 0.3*asinh(x*z) - 0.2", B15),
+    ("asin-domain-edge", "asin(x^2 + y^2 + z^2 - 0.5) - 1.5", B15),
+    # a cube with a cylindrical hole whose rims pass 0.1 and 0.05 from its
+    # edges: 12.8 and 6.4 fine cells at 256; the second raises fine to 512
+    ("cube-hole-0.1", "Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, 0.6 - sqrt(x^2+y^2))", ((-1.0, 1.0),) * 3),
+    ("cube-hole-0.05", "Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, 0.65 - sqrt(x^2+y^2))", ((-1.0, 1.0),) * 3),
 ]
 
 TORUS_POLY = "(x^2+y^2+z^2+0.64-0.09)^2 - 2.56(x^2+y^2)"
@@ -84,14 +103,15 @@ def main(argv=None) -> int:
     p.add_argument("--only", default="", help="comma-separated names (substrings)")
     a = p.parse_args(argv)
     keep = [s for s in a.only.split(",") if s]
-    print(f"{'surface':22s} {'wall s':>8s} {'cpu s':>8s} {'vertices':>9s} {'creases':>8s} {'mc 128^3 s':>10s}")
+    print(f"{'surface':22s} {'wall s':>8s} {'cpu s':>8s} {'vertices':>9s} {'creases':>8s} {'fine':>5s} {'mc 128^3 s':>10s}")
     for name, eq, box in SURFACES:
         if keep and not any(k in name for k in keep):
             continue
         wall, cpu, m = timed(eq, box, a.repeat)
         mc = marching_cubes_time(m.surface, box)
         creases = sum(1 for c in m.singular_curves if c.type == "crease")
-        print(f"{name:22s} {wall:8.2f} {cpu:8.2f} {len(m.vertices):9d} {creases:8d} {mc:10.2f}", flush=True)
+        print(f"{name:22s} {wall:8.2f} {cpu:8.2f} {len(m.vertices):9d} {creases:8d} {m.stats['fine']:5d} {mc:10.2f}",
+              flush=True)
     if not keep or any("torus" in k for k in keep):
         print()
         print("torus three ways (box [-1.5, 1.5]^3, defaults):")

@@ -12,7 +12,8 @@ operation (one ulp by ``np.nextafter`` after the correctly rounded ones,
 constants that are not doubles are enclosed by their two neighbours, and
 each function uses its exact monotonicity ranges (sin and cos over their
 periods, tan's poles, even/odd/negative/fractional powers, division by an
-interval holding 0, Min/Max of any number of arguments, Abs).
+interval holding 0, Min/Max of any number of arguments, Abs; asin, acos,
+atan, asinh, acosh, atanh are monotone).
 
 Derivatives (:meth:`Graph.diff`) are built on the graph itself, so they
 share its subexpressions.  Abs, Min and Max are not differentiable on
@@ -22,8 +23,9 @@ superset of Clarke's generalized gradient), so that "F_a of one sign on
 the box" still means F is strictly monotone along a on it.
 
 Domains (the rule of :mod:`singmesh.elementary`): F is undefined where a
-sqrt, log or non-integer power has a negative argument (as in sympy and
-numpy: no real value), and there is no surface there.  On a box the
+sqrt, log or non-integer power has a negative argument, asin or acos one
+outside [-1, 1], acosh one below 1, atanh one outside (-1, 1) (as in sympy
+and numpy: no real value), and there is no surface there.  On a box the
 argument is clipped to the function's domain (the bound is that of F on
 the part of the box where it is defined, and the box is flagged); a box
 wholly outside the domain gets NaN bounds, which no test accepts.
@@ -195,7 +197,8 @@ class Graph:
             return self.powr(b, r)
         unary = {sympy.exp: "exp", sympy.log: "log", sympy.sin: "sin", sympy.cos: "cos",
                  sympy.tan: "tan", sympy.sinh: "sinh", sympy.cosh: "cosh", sympy.tanh: "tanh",
-                 sympy.Abs: "abs"}
+                 sympy.asin: "asin", sympy.acos: "acos", sympy.atan: "atan", sympy.asinh: "asinh",
+                 sympy.acosh: "acosh", sympy.atanh: "atanh", sympy.Abs: "abs"}
         if e.func in unary:
             if len(e.args) != 1:
                 raise SurfaceError(f"{e.func.__name__} takes one argument: {e}")
@@ -208,7 +211,7 @@ class Graph:
         name = getattr(e.func, "__name__", str(e.func))
         raise SurfaceError(
             f"unsupported function {name} in {e}: use + - * /, powers, sqrt, abs, min, max, "
-            "exp, log, sin, cos, tan, sinh, cosh, tanh")
+            "exp, log, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, asinh, acosh, atanh")
 
     def _rfunction(self, e: sympy.Add) -> int | None:
         """The node of an R-function f + g +- sqrt(f^2 + g^2), or None.
@@ -329,6 +332,19 @@ class Graph:
             inner = self.node("sinh", (a,))
         elif op == "tanh":
             inner = self.sub(self.one, self.powi(n, 2))
+        elif op in ("asin", "acos"):
+            # +-(1 - a^2)^(-1/2): infinite at the domain's ends |a| = 1.
+            inner = self.powr(self.sub(self.one, self.powi(a, 2)), -0.5)
+            if op == "acos":
+                inner = self.neg(inner)
+        elif op == "atan":
+            inner = self.powi(self.add(self.one, self.powi(a, 2)), -1)
+        elif op == "asinh":
+            inner = self.powr(self.add(self.one, self.powi(a, 2)), -0.5)
+        elif op == "acosh":
+            inner = self.powr(self.sub(self.powi(a, 2), self.one), -0.5)
+        elif op == "atanh":
+            inner = self.powi(self.sub(self.one, self.powi(a, 2)), -1)
         elif op == "abs":
             inner = self.node("sgn", (a,))
         elif op in ("max", "min"):
@@ -507,6 +523,36 @@ def _periodic(lo, hi, fn, top, bottom, period=2 * _PI):
             np.where(nan, np.nan, np.minimum(rhi, 1.0)))
 
 
+#: The inverse functions with a bounded domain: its ends, whether an end is
+#: a pole (atanh: infinite there, so not in the domain), the numpy function.
+_DOMAINS = {"asin": (-1.0, 1.0, False, np.arcsin), "acos": (-1.0, 1.0, False, np.arccos),
+            "acosh": (1.0, np.inf, False, np.arccosh), "atanh": (-1.0, 1.0, True, np.arctanh)}
+
+
+def _inverse(op, lo, hi):
+    """Bounds of asin, acos, acosh or atanh on [lo, hi], clipped to the domain.
+
+    Returns (lo, hi, out): ``out`` where the interval leaves the domain (the
+    bounds are then those on its part inside), NaN bounds where it lies
+    wholly outside (no value: no surface there, as for sqrt).  All are
+    monotone: increasing but acos.
+    """
+    a, b, pole, fn = _DOMAINS[op]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = (lo <= a) | (hi >= b) if pole else (lo < a) | (hi > b)
+        cl, ch = np.clip(lo, a, b), np.clip(hi, a, b)
+        if op == "acos":
+            rl, rh = _widen(fn(ch), fn(cl))
+            rl = np.maximum(rl, 0.0)
+        else:
+            rl, rh = _widen(fn(cl), fn(ch))
+            if op == "acosh":
+                rl = np.maximum(rl, 0.0)
+    bad = (hi <= a) | (lo >= b) if pole else (hi < a) | (lo > b)
+    bad |= np.isnan(lo) | np.isnan(hi)
+    return np.where(bad, np.nan, rl), np.where(bad, np.nan, rh), out & ~bad
+
+
 def _unit(fl, fh, gl, gh):
     """Bounds of f / sqrt(f^2 + g^2) on [fl, fh] x [gl, gh] (NaN where unknown).
 
@@ -675,10 +721,15 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
                 rl, rh = (a, b) if p > 0 else (b, a)
                 # The exponent is rounded to a double: x^r moves by up to
                 # |r| |ln x| eps/2 relative.
-                slack = (FUNCTION_ULPS + abs(p) * np.maximum(np.abs(np.log(x0)), np.abs(np.log(ah)))) * _EPS
-                slack = np.where(np.isfinite(slack), slack, 1.0)
-                rl = np.maximum(rl - (rl * slack + _TINY), 0.0)
-                rh = rh + (rh * slack + _TINY)
+                # Each bound with the slack of its own end: 0^r (log 0 =
+                # -inf) must not widen the other end's finite power to 0.
+                sa = (FUNCTION_ULPS + abs(p) * np.abs(np.log(x0))) * _EPS
+                sb = (FUNCTION_ULPS + abs(p) * np.abs(np.log(ah))) * _EPS
+                sa = np.where(np.isfinite(sa), sa, 1.0)
+                sb = np.where(np.isfinite(sb), sb, 1.0)
+                sl, sh = (sa, sb) if p > 0 else (sb, sa)
+                rl = np.maximum(rl - (rl * sl + _TINY), 0.0)
+                rh = rh + (rh * sh + _TINY)
                 bad = ah < 0 if p > 0 else ah <= 0
                 rl, rh = np.where(bad, np.nan, rl), np.where(bad, np.nan, rh)
             elif op == "exp":
@@ -709,6 +760,13 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
             elif op == "tanh":
                 rl, rh = _widen(np.tanh(al), np.tanh(ah))
                 rl, rh = np.maximum(rl, -1.0), np.minimum(rh, 1.0)
+            elif op in ("asin", "acos", "acosh", "atanh"):
+                rl, rh, out = _inverse(op, al, ah)
+                clipped |= out
+            elif op == "atan":
+                rl, rh = _widen(np.arctan(al), np.arctan(ah))
+            elif op == "asinh":
+                rl, rh = _widen(np.arcsinh(al), np.arcsinh(ah))
             elif op == "abs":
                 rl, rh = _mig_mag(al, ah)
                 nan = np.isnan(al) | np.isnan(ah)
@@ -791,7 +849,12 @@ def _sgn(a):
 
 _UNARY = {"exp": np.exp, "log": np.log, "sin": np.sin, "cos": np.cos, "tan": np.tan,
           "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "abs": np.abs, "sqrt": np.sqrt,
-          "sgn": _sgn}
+          "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan, "asinh": np.arcsinh,
+          "acosh": np.arccosh, "atanh": np.arctanh, "sgn": _sgn}
+
+
+#: Functions with a square-root end of their domain (Hoelder exponent 1/2 there).
+_HOLDER = ("sqrt", "asin", "acos", "acosh")
 
 
 def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = False):
@@ -801,7 +864,8 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
     also the size of each value's terms, the scale of its rounding error:
     sums become sums of magnitudes, products products, and a function
     f(u) has |f(u)| + |f'(u)| mag(u) (its own rounding and the propagated
-    error of u).
+    error of u; at most sqrt(2 mag(u) / eps) for sqrt, asin, acos and
+    acosh, finite at the ends of their domains).
 
     Returns
     -------
@@ -895,12 +959,17 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                     elif op == "tanh":
                         dm = 1.0 - r * r
                     elif op == "sqrt":
-                        # An error e of u moves sqrt(u) by at most sqrt(e),
-                        # however small u is (0.5 / r is infinite at u = 0;
-                        # cos(k sqrt(u)) on the cosine bump's axis).
-                        mu = M[args[0]]
-                        with np.errstate(divide="ignore"):
-                            M[n] = np.abs(r) + np.where(mu == 0, 0.0, np.minimum(0.5 / r * mu, np.sqrt(mu / _EPS)))
+                        dm = 0.5 / r  # capped below (_HOLDER): cos(k sqrt(u)) on the cosine bump's axis
+                    elif op in ("asin", "acos"):
+                        dm = 1.0 / np.sqrt(1.0 - a * a)
+                    elif op == "atan":
+                        dm = 1.0 / (1.0 + a * a)
+                    elif op == "asinh":
+                        dm = 1.0 / np.sqrt(1.0 + a * a)
+                    elif op == "acosh":
+                        dm = 1.0 / np.sqrt(a * a - 1.0)
+                    elif op == "atanh":
+                        dm = 1.0 / np.abs(1.0 - a * a)
                     elif op == "abs":
                         M[n] = M[args[0]]
                     elif op == "sgn":
@@ -910,7 +979,15 @@ def point_eval(graph: Graph, outputs, points: np.ndarray, magnitude: bool = Fals
                 # An argument without error propagates none, even where f'
                 # is infinite (sqrt at 0): inf * 0 would make it NaN.
                 mu = M[args[0]]
-                M[n] = np.abs(r) + np.where(mu == 0, 0.0, dm * mu)
+                prop = dm * mu
+                if op in _HOLDER:
+                    # At the end of the domain f' is infinite but f moves
+                    # by at most sqrt(2 d) when u moves by d (sqrt at 0,
+                    # asin at 1, acosh at 1): an error eps mu in u gives
+                    # at most sqrt(2 mu / eps) ulps (not inf: sqrt(1 - x)
+                    # at x = 1 would be "zero" whatever its value).
+                    prop = np.fmin(prop, np.sqrt(2.0 * mu / _EPS))
+                M[n] = np.abs(r) + np.where(mu == 0, 0.0, prop)
             for b in args:
                 if last.get(b) == n and b not in keep:
                     V.pop(b, None)

@@ -19,7 +19,7 @@ from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
-from singmesh.skeleton.creases import crease_curves, merge_curve_sets
+from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -82,7 +82,10 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         Where two isolated singular points are closer than
         ``STAR_MIN_GAP`` such boxes, it is doubled until they are not
         (each point needs a cube of its own), at most ``STAR_MAX_RAISE``
-        times;
+        times; where two creases (sharp edges) are closer than
+        ``CREASE_MIN_GAP`` such boxes, the same, at most
+        ``CREASE_MAX_RAISE`` times (``Mesh.stats["crease_gap"]``: their
+        distance in boxes at the level used);
         ``Mesh.stats["fine"]`` is the value used.
     **params
         Values of named parameters of the equation.
@@ -126,6 +129,16 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # Creases (kinks of F on the surface) are meshed as the singular
     # curves are: tubes with two half-sheets along them.
     creases = crease_curves(surf, b, step=float(cell.max()))
+    # Creases closer than a tube's width share one tube and lose the piece
+    # of surface between them: the lattice is made finer until they do not.
+    gap = crease_gap(creases, b, fine_level)
+    raised = _fine_for_creases(gap, fine_level)
+    if raised > fine_level:
+        gap *= 1 << (raised - fine_level)
+        fine_level = raised
+        cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
+        curves = singular_curves(surf, b, step=float(cell.max()))
+        creases = crease_curves(surf, b, step=float(cell.max()))
     curves = merge_curve_sets(curves, creases)
     t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
@@ -225,6 +238,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "repeated_factors": repeated,
         "overlapping_stars": len(clashes),
         "fine": 1 << fine_level,
+        # Distance (fine cells) of the two closest creases, where closer
+        # than CREASE_MIN_GAP (then ``fine`` was raised for them), else None.
+        "crease_gap": gap if np.isfinite(gap) else None,
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
@@ -262,6 +278,17 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
     f = f[~np.isnan(f)]
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
     return f"empty mesh: the surface F = {surface.expr} does not meet the box {where} (F is {sign} there)"
+
+
+def _fine_for_creases(gap: float, fine_level: int) -> int:
+    """The fine level at which creases ``gap`` fine cells apart are ``CREASE_MIN_GAP`` cells apart.
+
+    At most ``CREASE_MAX_RAISE`` levels more, and ``MAX_LEVEL``.
+    """
+    if gap >= tol.CREASE_MIN_GAP:
+        return fine_level
+    more = int(np.ceil(np.log2(tol.CREASE_MIN_GAP / max(gap, 1e-300))))
+    return min(fine_level + min(more, tol.CREASE_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> int:

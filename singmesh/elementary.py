@@ -2,7 +2,8 @@
 
 :class:`ElementarySurface` implements the surface interface (issue #10)
 for F built from + - * /, powers (fractional too), sqrt, Abs, Min, Max,
-exp, log, sin, cos, tan, sinh, cosh, tanh.  F is compiled once into an
+exp, log, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, asinh, acosh,
+atanh.  F is compiled once into an
 expression graph (:mod:`singmesh.boxes.intervals`) with its three partial
 derivatives; boxes are bounded by vectorised interval arithmetic with
 outward rounding (the better of the natural extension and the centred
@@ -21,15 +22,24 @@ is ``a + t * (b - a)``, the same double as the octree's
 Domain rule
 -----------
 F is *undefined* where sqrt, log or a non-integer power gets a negative
-argument (also log of 0 and a negative power of 0), as in sympy and
-numpy, and there is no surface there: values at such points are NaN; on
+argument (also log of 0 and a negative power of 0), asin or acos one
+outside [-1, 1], acosh one below 1, atanh one outside (-1, 1), as in
+sympy and numpy, and there is no surface there: values at such points are NaN; on
 a box an argument is clipped to the function's domain, so the bounds are
 those of F on the part of the box where it is defined, and a box wholly
 outside the domain is empty (``excludes_zero`` is True).  Division by an
 interval holding 0 (a pole) gives infinite bounds: such boxes are never
 excluded nor simple, and a sign change of F across a pole is not a root
 (``line_roots`` keeps only roots where |F| is at rounding level relative
-to its terms).  The surface may therefore end where F's domain ends (the
+to its terms).  Where the surface runs into a pole (x / y = 0, the plane
+x = 0, meets the pole y = 0 along the line x = y = 0, where F = 0 / 0),
+the boxes that touch the pole hold no vertex on it (F is infinite or
+undefined on their faces there); instead, with F = N / D over a common
+denominator (sympy's ``cancel``), the curve N = D = 0 is traced as a
+crease (:meth:`ElementarySurface.crease_systems`, "pole line") and the
+half-sheets on both sides of the pole are zipped to it by the tubes: the
+mesh ends exactly on the pole line (its vertices there have F = 0 / 0,
+NaN, and a zero normal).  The surface may therefore end where F's domain ends (the
 mesh then has a boundary there); :meth:`ElementarySurface.undefined_on`
 names a subexpression that is undefined somewhere on given boxes, for a
 caller that prefers an error.
@@ -63,6 +73,11 @@ def _imul(al, ah, bl, bh):
         p = np.stack([al * bl, al * bh, ah * bl, ah * bh])
     # fmin/fmax skip NaN (0 * inf) without nanmin's warning on all-NaN columns.
     return np.nextafter(np.fmin.reduce(p, axis=0), -np.inf), np.nextafter(np.fmax.reduce(p, axis=0), np.inf)
+
+
+def _finite_abs(a):
+    """|a| where finite, 0 where infinite (NaN stays NaN)."""
+    return np.where(np.isinf(a), 0.0, np.abs(a))
 
 
 def _one_sign(lo, hi):
@@ -111,7 +126,7 @@ class ElementarySurface(Surface):
         self._creases = [n for n in g.plan([self._f]) if g.ops[n] == "rfun" and g.args[n][2] in g.arcs
                          and g.arcs[g.args[n][2]] == tuple(g.args[n][:2])]
         self._poles = any(
-            g.ops[n] in ("tan", "log") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
+            g.ops[n] in ("tan", "log", "atanh") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
             for n in g.plan([self._f]))
         s = np.linspace(-1.0, 1.0, 5)
         grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
@@ -328,8 +343,11 @@ class ElementarySurface(Surface):
     def _slack(self, flo, fhi, lo, hi):
         """Room for rounding when reading F's bounds: PRUNE_SLACK of their size,
         and at least F's rounding error at the box centre where that matters."""
-        slack = tol.PRUNE_SLACK * np.maximum(np.abs(flo), np.abs(fhi))
-        near = np.nonzero(np.minimum(np.abs(flo), np.abs(fhi)) <= 1e6 * tol.ZERO_ULPS * _EPS * np.maximum(np.abs(flo), np.abs(fhi)))[0]
+        # From the finite bounds: F in [1.6, inf] next to a pole (atanh at
+        # 1, log at 0) has no zero, and an infinite slack would say it may.
+        size = np.maximum(_finite_abs(flo), _finite_abs(fhi))
+        slack = tol.PRUNE_SLACK * size
+        near = np.nonzero(np.minimum(np.abs(flo), np.abs(fhi)) <= 1e6 * tol.ZERO_ULPS * _EPS * size)[0]
         if len(near):
             c = (lo[near] + hi[near]) * 0.5
             _, (m,) = point_eval(self._graph, [self._f], c, magnitude=True)
@@ -473,12 +491,15 @@ class ElementarySurface(Surface):
                 r = interval_eval(self._graph, [self._grad[a] for a in axes], lo, hi, force=force)
             for k in range(len(axes)):
                 gl, gh = r.lo[k], r.hi[k]
-                s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+                # The slack from the finite bound only: a derivative in
+                # [5, inf] (asin or sqrt at its domain's end) is not 0.
+                size = np.maximum(_finite_abs(gl), _finite_abs(gh))
+                s = tol.CANDIDATE_SLACK * size
                 keep &= (gl <= s) & (gh >= -s)
         idx = np.nonzero(keep)[0]
         if value and len(idx):
             flo, fhi = self._value_bounds(lo[idx], hi[idx])
-            slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(np.abs(flo), np.abs(fhi)),
+            slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(_finite_abs(flo), _finite_abs(fhi)),
                                self._slack(flo, fhi, lo[idx], hi[idx]))
             keep[idx] = (flo <= slack) & (fhi >= -slack)
         return keep
@@ -490,7 +511,10 @@ class ElementarySurface(Surface):
         A Max or Min node with arguments a_1 ... a_k gives, for each pair
         i < j, G1 = F with the node replaced by a_i and G2 = a_i - a_j;
         an Abs node of a: G1 = F with the node replaced by a, G2 = a; an
-        R-function f + g +- sqrt(f^2 + g^2): G1 = f, G2 = g.
+        R-function f + g +- sqrt(f^2 + g^2): G1 = f, G2 = g; and where F has
+        poles, F = N / D over a common denominator: G1 = N, G2 = D (the
+        pole line, where the surface runs into a pole; not a kink, but
+        meshed as one: the mesh ends on it).
         """
         if getattr(self, "_crease_systems", None) is None:
             g, f = self._graph, self._f
@@ -510,6 +534,9 @@ class ElementarySurface(Surface):
             for k in self._creases:
                 fa, ga = g.args[k][:2]
                 out.append(_Kink(self, "R-function crease", fa, ga, None, (), "rfun"))
+            pole = self._pole_line()
+            if pole is not None:
+                out.append(pole)
             self._crease_systems = out
         return self._crease_systems
 
@@ -528,6 +555,31 @@ class ElementarySurface(Surface):
             self._tip_systems = out
         return self._tip_systems
 
+    def _pole_line(self):
+        """The curve where the surface runs into a pole of F = N / D, as a crease system (N, D), or None.
+
+        The surface N = 0 meets the pole D = 0 along N = D = 0, where F is
+        0 / 0: meshed as a crease there (the half-sheets on the two sides
+        of the pole zipped to it), the mesh ends on the pole line instead of
+        a few fine cells short of it.
+        """
+        if not self._poles:
+            return None
+        try:
+            # cancel: a common factor of N and D (x^2 - y^2 over x - y) would
+            # make N = D = 0 a surface, not a line.
+            num, den = sympy.fraction(sympy.cancel(sympy.together(self.expr)))
+        except (TypeError, ValueError):  # pragma: no cover - sympy cannot combine it
+            return None
+        if not den.free_symbols or not num.free_symbols:
+            return None
+        g = self._graph
+        try:
+            n, d = g.from_sympy(num), g.from_sympy(den)
+        except SurfaceError:
+            return None
+        return _Kink(self, "pole line", n, d, None, (), "pole")
+
     def undefined_on(self, data: np.ndarray):
         """A subexpression of F undefined somewhere on one of the boxes, or None.
 
@@ -538,24 +590,12 @@ class ElementarySurface(Surface):
         SurfaceError.
         """
         lo, hi = self.corners(data)
-        for node in sympy.preorder_traversal(self.expr):
-            if not node.free_symbols:
-                continue
-            arg = None
-            if isinstance(node, (sympy.log,)):
-                arg, strict = node.args[0], True
-            elif isinstance(node, sympy.Pow) and not node.exp.free_symbols:
-                e = node.exp
-                if not e.is_Integer:
-                    arg, strict = node.base, bool(e.is_negative)
-                elif e.is_negative:
-                    arg, strict = node.base, None
-            if arg is None:
-                continue
+        for node, arg, strict in _domain_conditions(self.expr):
             g = Graph()
             n = g.from_sympy(arg)
             r = interval_eval(g, [n], lo, hi)
-            bad = (r.lo[0] < 0) if strict is False else (r.lo[0] <= 0) if strict else ((r.lo[0] <= 0) & (r.hi[0] >= 0))
+            # (-1e-300: the outward rounding of an exact 0, as 1 - y at y = 1)
+            bad = (r.lo[0] < -1e-300) if strict is False else (r.lo[0] <= 0) if strict else ((r.lo[0] <= 0) & (r.hi[0] >= 0))
             if bad.any():
                 i = int(np.nonzero(bad)[0][0])
                 t = np.linspace(0, 1, 9)
@@ -748,6 +788,30 @@ class ElementarySurface(Surface):
         return x, good
 
 
+def _domain_conditions(expr: sympy.Expr):
+    """(subexpression, argument, strict) for each function of ``expr`` with a domain:
+    it is defined where the argument is >= 0 (strict False), > 0 (True), != 0 (None)."""
+    for node in sympy.preorder_traversal(expr):
+        if not node.free_symbols:
+            continue
+        if isinstance(node, sympy.log):
+            yield node, node.args[0], True
+        elif isinstance(node, sympy.Pow) and not node.exp.free_symbols:
+            e = node.exp
+            if not e.is_Integer:
+                yield node, node.base, bool(e.is_negative)
+            elif e.is_negative:
+                yield node, node.base, None
+        elif isinstance(node, (sympy.asin, sympy.acos)):
+            yield node, 1 - node.args[0], False
+            yield node, 1 + node.args[0], False
+        elif isinstance(node, sympy.acosh):
+            yield node, node.args[0] - 1, False
+        elif isinstance(node, sympy.atanh):
+            yield node, 1 - node.args[0], True
+            yield node, 1 + node.args[0], True
+
+
 class _Kink(CreaseSystem):
     """A kink of an :class:`ElementarySurface`: G1, G2 as nodes of its graph.
 
@@ -774,9 +838,20 @@ class _Kink(CreaseSystem):
     def active(self, points):
         p = np.asarray(points, float).reshape(-1, 3)
         g = self._s._graph
-        (fv,), (fm,) = point_eval(g, [self._s._f], p, magnitude=True)
-        # On the crease F = G1 (the tie): F at rounding level of its terms.
-        ok = np.abs(fv) <= tol.CREASE_RESIDUAL * np.maximum(fm, 1e-300)
+        if self._op == "pole":
+            # N = D = 0 (Newton put the point there) on a curve (grad N and
+            # grad D apart): the surface meets the pole there.
+            v, d = self.values(p)
+            cross = np.linalg.norm(np.cross(d[:, 0], d[:, 1]), axis=1)
+            size = np.linalg.norm(d[:, 0], axis=1) * np.linalg.norm(d[:, 1], axis=1)
+            return np.isfinite(v).all(axis=1) & (cross > tol.CREASE_JUMP * size)
+        (fv, *grad), (fm, *_) = point_eval(g, [self._s._f] + self._s._grad, p, magnitude=True)
+        # On the crease F = G1 (the tie): F at rounding level of its terms,
+        # or of its gradient times the point's scale (as Newton's test):
+        # on z - y |x|'s crease x = z = 0 every term of F vanishes, and a
+        # point 1e-17 off it has F = 3e-18 with terms of the same size.
+        size = np.linalg.norm(np.stack(grad, 1), axis=1) * np.maximum(np.abs(p).max(axis=1), 1.0)
+        ok = np.abs(fv) <= tol.CREASE_RESIDUAL * np.maximum(np.fmax(fm, size), 1e-300)
         if self._tie:
             vals = point_eval(g, list(self._tie), p, magnitude=True)
             a, ma = vals[0][0], vals[1][0]
@@ -795,7 +870,7 @@ class _Kink(CreaseSystem):
         r = interval_eval(self._s._graph, [self._g1, self._g2], lo, hi)
         keep = np.ones(len(lo), bool)
         for gl, gh in zip(r.lo, r.hi):
-            s = tol.CANDIDATE_SLACK * np.maximum(np.abs(gl), np.abs(gh))
+            s = tol.CANDIDATE_SLACK * np.maximum(_finite_abs(gl), _finite_abs(gh))
             keep &= ~((gl > s) | (gh < -s))  # NaN (outside the domain): kept
         return keep
 

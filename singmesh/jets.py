@@ -7,13 +7,15 @@ the coefficients of the monomials of degree <= n (graded order, see
 is computed over the expression graph of :mod:`singmesh.boxes.intervals`:
 sums termwise, products by convolution (truncated), and each elementary
 function f composed as sum_k f^(k)(a0)/k! h^k, with a0 the series'
-constant term and h the series minus it.
+constant term and h the series minus it (the inverse functions' f^(k)
+from their derivatives, powers of quadratics).
 
 At a kink (Abs of 0, Min/Max with tied arguments) the series of one
 piece is taken: Abs's positive one, the first of the tied arguments.
 Where a function is undefined (sqrt, log, non-integer power of a
 negative number, or of 0 with a derivative that is infinite there;
-division by 0) the coefficients are NaN.
+asin, acos, acosh, atanh outside their domains or at its ends; division
+by 0) the coefficients are NaN.
 """
 
 from __future__ import annotations
@@ -128,7 +130,45 @@ def _univariate(op: str, a0: np.ndarray, n: int, param=None) -> np.ndarray:
             # Defined for a0 > 0 (a0 < 0 too for -1); sqrt and powers of 0 have no series.
             ok = (a0 > 0) if op != "recip" else (a0 != 0)
             return np.where(ok[:, None], c, np.nan)
+        if op in _INVERSE:
+            return _inverse_coefficients(op, a0, n)
     raise AssertionError(op)  # pragma: no cover
+
+
+#: The inverse functions by their derivatives sign * q(a)^r, with q a
+#: quadratic (coefficients of 1, a, a^2): asin' = (1 - a^2)^(-1/2), ...
+_INVERSE = {"asin": (1.0, (1.0, 0.0, -1.0), -0.5, np.arcsin), "acos": (-1.0, (1.0, 0.0, -1.0), -0.5, np.arccos),
+            "atan": (1.0, (1.0, 0.0, 1.0), -1.0, np.arctan), "asinh": (1.0, (1.0, 0.0, 1.0), -0.5, np.arcsinh),
+            "acosh": (1.0, (-1.0, 0.0, 1.0), -0.5, np.arccosh), "atanh": (1.0, (1.0, 0.0, -1.0), -1.0, np.arctanh)}
+
+
+def _inverse_coefficients(op: str, a0: np.ndarray, n: int) -> np.ndarray:
+    """Taylor coefficients of asin, acos, atan, asinh, acosh, atanh at a0: (P, n+1).
+
+    The derivative sign * q(a0 + t)^r is a power of a quadratic in t, whose
+    series follows from J.C.P. Miller's recurrence (b = q^r:
+    k q_0 b_k = sum_j ((r + 1) j - k) q_j b_(k-j)); the function's are its
+    integral.  NaN where q(a0) <= 0: outside the domain or at its ends,
+    where the derivative is infinite (asin at 1, like sqrt at 0).
+    """
+    sign, (c0, _, c2), r, fn = _INVERSE[op]
+    q = np.zeros((len(a0), 3))
+    q[:, 0] = c0 + c2 * a0 * a0
+    q[:, 1] = 2.0 * c2 * a0
+    q[:, 2] = c2
+    out = np.empty((len(a0), n + 1))
+    with np.errstate(all="ignore"):
+        out[:, 0] = fn(a0)
+        b = np.zeros((len(a0), max(n, 1)))
+        b[:, 0] = np.power(q[:, 0], r)
+        for k in range(1, n):
+            acc = np.zeros(len(a0))
+            for j in (1, 2):
+                if j <= k:
+                    acc += ((r + 1.0) * j - k) * q[:, j] * b[:, k - j]
+            b[:, k] = acc / (k * q[:, 0])
+        out[:, 1:] = sign * b[:, :n] / np.arange(1, n + 1)
+    return np.where((q[:, 0] > 0)[:, None], out, np.nan)
 
 
 def graph_jets(graph: Graph, output: int, points: np.ndarray, order: int) -> np.ndarray:

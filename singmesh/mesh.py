@@ -90,7 +90,10 @@ class Mesh:
         if self.normals is None:
             g = self.surface.gradient(self.vertices) if len(self.vertices) else np.zeros((0, 3))
             norm = np.linalg.norm(g, axis=1, keepdims=True)
-            self.normals = np.where(norm > 0, g / np.where(norm > 0, norm, 1), 0.0)
+            # Zero where grad F is 0 (an isolated line) or not finite (a
+            # vertex on a pole line, where F = 0 / 0).
+            ok = (norm > 0) & np.isfinite(norm)
+            self.normals = np.where(ok, g / np.where(ok, norm, 1), 0.0)
 
     @property
     def skeleton_nodes(self) -> np.ndarray:

@@ -94,6 +94,24 @@ STAR_MIN_GAP = 3.0
 #: points keep the lattice and are reported.
 STAR_MAX_RAISE = 4
 
+#: Two creases (or two stretches of one) closer than this many fine cells
+#: (max norm) share one tube (radius CURVE_TUBE_RADIUS + CURVE_TUBE_GROW
+#: = 5.5 cells around each): the piece of surface between them then has
+#: no rail and is lost (a cube with a cylindrical hole near its edges:
+#: open edges at 6.4, 7.4, 8.4 and 9.4 cells, none at 10.2, 11.0, 12.8).
+#: The fine level is doubled until they are this far apart ...
+CREASE_MIN_GAP = 12.0
+
+#: ... at most this many levels (8 times finer); closer creases keep the
+#: lattice and the gap is reported in Mesh.stats.
+CREASE_MAX_RAISE = 3
+
+#: Points of the creases count as apart (for CREASE_MIN_GAP) when the way
+#: between them along the creases is longer than this times their
+#: distance: two creases meeting at a corner at more than ~40 degrees are
+#: not close there.
+CREASE_GAP_DETOUR = 3.0
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8

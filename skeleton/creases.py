@@ -31,6 +31,8 @@ from dataclasses import replace
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
@@ -370,7 +372,120 @@ def crease_curves(surface: Surface, box, step: float, level: int | None = None) 
             else:
                 lines[k][1] = np.vstack([p[:-1] if near else p, x[None]])
     lines = _densify(systems, [(s, p, c, tuple(how)) for s, p, c, how, _ in lines], tol.CREASE_TRACE_STEP)
+    lines = _attach_fading_ends(systems, lines, h)
     return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
+
+
+def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int) -> float:
+    """The smallest distance (max norm, fine cells) between two points of the creases that are apart.
+
+    Two vertices of the curve graph are apart when the way between them
+    along the graph is more than ``CREASE_GAP_DETOUR`` times their distance
+    (two creases, or two stretches of one; not two creases near the corner
+    where they meet).  ``inf`` when no such pair is closer than
+    ``CREASE_MIN_GAP`` cells.
+    """
+    n = len(curves.points)
+    if n < 2:
+        return float("inf")
+    box = np.asarray(box, dtype=float)
+    cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
+    p = curves.points / cell
+    pairs = cKDTree(p).query_pairs(tol.CREASE_MIN_GAP, p=np.inf, output_type="ndarray")
+    if len(pairs) == 0:
+        return float("inf")
+    d = np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
+    e = curves.edges
+    # A crease that ends inside the box (its kink fades out) is joined to
+    # what lies within CREASE_MIN_GAP cells of its end: creases fading out
+    # where they meet (z - |x| max(y, 0)) are not apart there.
+    degree = np.bincount(e.ravel(), minlength=n)
+    inner = ~_faces_hit(curves.points, box).any(axis=(1, 2))
+    ends = np.nonzero((degree == 1) & inner)[0]
+    if len(ends):
+        near = cKDTree(p).query_ball_point(p[ends], tol.CREASE_MIN_GAP, p=np.inf)
+        extra = np.array([(a, b) for a, nb in zip(ends.tolist(), near) for b in nb if b != a], np.int64).reshape(-1, 2)
+        e = np.concatenate([e, extra])
+    # (+1e-9: csgraph drops explicit zero weights, as two coincident vertices)
+    w = np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) + 1e-9
+    graph = coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    src, inv = np.unique(pairs[:, 0], return_inverse=True)
+    limit = tol.CREASE_GAP_DETOUR * tol.CREASE_MIN_GAP * np.sqrt(3.0)
+    way = dijkstra(graph, directed=False, indices=src, limit=limit)[inv.reshape(-1), pairs[:, 1]]
+    apart = way > tol.CREASE_GAP_DETOUR * d
+    if not apart.any():
+        return float("inf")
+    return float(np.abs(p[pairs[apart, 0]] - p[pairs[apart, 1]]).max(axis=1).min())
+
+
+def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
+    """Creases whose kink fades out on another crease, ending on it (a T junction).
+
+    Where a crease ends inside the box because its kink fades out
+    (``"end"``: its gradient jump goes to 0), and another crease passes
+    within ``CREASE_CORNER`` steps of that end, the two meet there: in
+    z - |x| max(y, 0) the kink of |x| fades at y = 0, on the crease of
+    max(y, 0), whose own jump fades at x = 0 too, so neither kink is
+    active there and no trace sees the other.  The meeting point (Gauss-
+    Newton on both creases' equations) becomes the end, and the other
+    crease is cut there, so that :func:`_curve_set` makes it one corner of
+    the three ends.  A closed crease is not cut (left as it is).
+    """
+    lines = list(lines)
+    for k in range(len(lines)):
+        for e in (0, 1):
+            s, p, closed, how = lines[k]
+            if closed or how[e] != "end":
+                continue
+            x = p[0] if e == 0 else p[-1]
+            best = None
+            for j, (sj, q, cj, _) in enumerate(lines):
+                if j == k or cj or len(q) < 2:
+                    continue
+                d = np.linalg.norm(q - x, axis=1)
+                i = int(np.argmin(d))
+                if d[i] <= tol.CREASE_CORNER * h and (best is None or d[i] < best[0]):
+                    best = (float(d[i]), j, i)
+            if best is None:
+                continue
+            _, j, i = best
+            sj, q, _, how_j = lines[j]
+            z = _corner(systems, sorted({s, sj}), x, h)
+            if z is None:
+                continue
+            # This crease ends at z ...
+            p = p.copy()
+            if e == 0:
+                p = np.vstack([z[None], p[1:]]) if np.linalg.norm(p[0] - z) < tol.CURVE_MERGE * h and len(p) > 2 \
+                    else np.vstack([z[None], p])
+            else:
+                p = np.vstack([p[:-1], z[None]]) if np.linalg.norm(p[-1] - z) < tol.CURVE_MERGE * h and len(p) > 2 \
+                    else np.vstack([p, z[None]])
+            lines[k] = (s, p, False, (("meet", how[1]) if e == 0 else (how[0], "meet")))
+            # ... and the other is cut at z (at its vertex i, or next to it).
+            if i == 0 or i == len(q) - 1:
+                q = q.copy()
+                q[i] = z
+                hj = list(how_j)
+                hj[0 if i == 0 else 1] = "meet"
+                lines[j] = (sj, q, False, tuple(hj))
+                continue
+            if np.linalg.norm(q[i] - z) < 1e-6 * h:
+                first, second = np.vstack([q[:i], z[None]]), np.vstack([z[None], q[i + 1:]])
+            else:
+                # z between vertices i - 1 and i, or i and i + 1.
+                ahead = np.dot(z - q[i], q[i + 1] - q[i]) > 0
+                cut = i + 1 if ahead else i
+                first, second = np.vstack([q[:cut], z[None]]), np.vstack([z[None], q[cut:]])
+            lines[j] = (sj, first, False, (how_j[0], "meet"))
+            lines.append((sj, second, False, ("meet", how_j[1])))
+    return lines
+
+
+def _faces_hit(points: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(k, 3, 2) bool: which faces of the box the points lie on (to 1e-9 of its size)."""
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    return np.stack([np.abs(points - box[:, 0]) <= 1e-9 * size, np.abs(points - box[:, 1]) <= 1e-9 * size], -1)
 
 
 def _join_on_box(surface: Surface, curves: CurveSet, box: np.ndarray, step: float) -> CurveSet:

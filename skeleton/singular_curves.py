@@ -319,6 +319,12 @@ def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bo
     With ``drop_smallest`` the smallest is always dropped: the step goes
     across the curve, whose tangent that singular vector estimates.
     """
+    # Where F or a derivative is undefined or infinite (the end of sqrt's
+    # or asin's domain) no step: the point is not accepted.
+    bad = ~(np.isfinite(j).all(axis=(1, 2)) & np.isfinite(r).all(axis=1))
+    if bad.any():
+        j = np.where(bad[:, None, None], 0.0, j)
+        r = np.where(bad[:, None], 0.0, r)
     u, sv, vt = np.linalg.svd(j, full_matrices=False)
     cut = np.maximum(1e-12 * sv[:, :1], floor)
     keep = sv > cut

@@ -18,8 +18,10 @@ from scipy.sparse.csgraph import connected_components
 
 import singmesh
 
+import meshcheck as mc
+
 X, Y, Z = sp.symbols("x y z", real=True)
-LOC = {"x": X, "y": Y, "z": Z, "Max": sp.Max, "Min": sp.Min, "Abs": sp.Abs}
+LOC = {"x": X, "y": Y, "z": Z, "Max": sp.Max, "Min": sp.Min, "Abs": sp.Abs, "sqrt": sp.sqrt}
 SPH = "(x**2+y**2+z**2-1)"
 
 
@@ -239,3 +241,112 @@ def test_inactive_kinks_make_no_crease():
     # ... while the tie of |x| and |y| on the surface is one, and the corner is on three.
     assert len(creases_at(np.array([[0.7, -0.7, 0.1]]))) == 1
     assert len(creases_at(np.array([[0.7, -0.7, 0.7]]))) == 3
+
+
+def test_close_creases_raise_the_fine_level():
+    # A cube with a cylindrical hole whose rims pass 0.21 from the cube's
+    # edges: 6.6 fine cells at fine = 64, where the two creases' tubes
+    # merge and the strip of the top face between them is lost (open and
+    # non-manifold edges).  The fine level is raised until they are
+    # CREASE_MIN_GAP cells apart, and the mesh is right.
+    r, cx, cy = 0.4687654321, 0.0123456789, -0.0234567891
+    hole = f"((x-{cx})**2+(y-({cy}))**2)"
+    eq = f"Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, {r} - sqrt({hole}))"
+    box = np.array([[-1.0, 1.0]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
+    assert m.stats["fine"] == 128 and 12 <= m.stats["crease_gap"] < 24
+    pairs = CUBE_PAIRS + [(f"z{s}0.7", f"{hole}-{r}**2") for s in "+-"]
+    V, T = m.vertices, m.faces
+    size = 2.0
+    on = _on_crease(V, pairs, 1e-10 * size)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
+    near = length <= 4 * size / 128
+    crease_edges, counts = edges[sel][near], cnt[sel][near]
+    samples = crease_points(eq, pairs, box, starts=1400)
+    assert len(samples) > 100
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    sagitta = float(length[near].max()) ** 2 / (8 * r) * 1.01
+    assert d.max() <= sagitta + 1e-9 * size, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+    assert np.linalg.norm(V[None] - CUBE_CORNERS[:, None], axis=2).min(axis=1).max() <= 1e-12 * size
+    # Closed, of genus 1 (the checks for a sphere's closed=True aside).
+    _check_mesh(m, eq, box, closed=False)
+    assert (cnt == 1).sum() == 0 and (cnt > 2).sum() == 0
+    assert len(np.unique(T)) - len(edges) + len(T) == 0
+    assert m.stats["creases"] == 14
+
+
+_U, _V, _W = (f"({_lin(R[i])}{c:+.10f})" for i, c in enumerate((0.0123456789, -0.0234567891, 0.0345678912)))
+#: The point u = v = w = 0 (where the kinks fade out).
+_FADE = np.linalg.solve(R, -np.array([0.0123456789, -0.0234567891, 0.0345678912]))
+
+
+@pytest.mark.parametrize("eq, pairs, fade_vertex", [
+    # The kink of |u| fades out (its jump 2 v^2 goes to 0) at v = 0: the
+    # crease u = w = 0 (v > 0) ends inside the box, where the surface is
+    # smooth (C^1).
+    (f"{_W} - Abs({_U})*Max({_V}, 0)**2", [(_U, _W)], False),
+    # Both kinks fade out where they meet: |u| (jump 2 v) on the crease of
+    # max(v, 0) (jump |u|): a T junction whose three creases end at one
+    # vertex.
+    (f"{_W} - Abs({_U})*Max({_V}, 0)", [(_U, _W), (_V, _W)], True),
+], ids=["fading-end", "fading-T"])
+def test_crease_ending_inside_the_box(eq, pairs, fade_vertex):
+    box = np.array([[-1.0, 1.0]] * 3)
+    size = 2.0
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
+    V, T = m.vertices, m.faces
+    on = _on_crease(V, pairs, 1e-10 * size)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
+    near = length <= 4 * size / 64
+    crease_edges, counts = edges[sel][near], cnt[sel][near]
+    # Crease samples where the kink is there (v > 0 for |u|'s), a little
+    # away from where it fades: on mesh edges.
+    v_of = _numpy(_expr(_V))
+    samples = crease_points(eq, pairs, box)
+    samples = samples[(v_of(samples) > 0.02) | (np.abs(_numpy(_expr(_U))(samples)) > 0.02)]
+    assert len(samples) > 50
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 1e-9 * size, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+    # The crease ends at a vertex at (T: exactly) or next to (fading end)
+    # the point where the kinks fade, and the surface is a manifold disc
+    # around it.
+    dist = np.linalg.norm(V - _FADE, axis=1)
+    assert dist.min() <= (1e-12 if fade_vertex else 1e-2) * size
+    end = int(np.argmin(dist))
+    assert on[end]
+    assert mc.fans_at(T, end) == 1 and mc.fans_are_closed(T, end)
+    _check_mesh(m, eq, box, closed=False)
+    assert len(np.unique(T)) - len(edges) + len(T) == 1
+
+
+@pytest.mark.parametrize("eq, pairs, kink", [
+    # jump 2|y|: fades at the origin, goes on
+    ("z - y*Abs(x)", [("x", "z")], lambda p: np.abs(p[:, 1]) > 0.05),
+    # the T junction on split planes (|x|'s kink only where y > 0)
+    ("z - Abs(x)*Max(y, 0)", [("x", "z"), ("y", "z")], lambda p: (p[:, 1] > 0.05) | (np.abs(p[:, 0]) > 0.05)),
+], ids=["linear-fade", "T"])
+def test_fading_creases_on_split_planes(eq, pairs, kink):
+    # Every term of F vanishes on these creases (x = z = 0): a point 1e-17
+    # off one has F at the size of its terms, and must still count as on it.
+    box = np.array([[-1.0, 1.0]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
+    V, T = m.vertices, m.faces
+    on = _on_crease(V, pairs, 2e-10)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
+    crease_edges = edges[sel][length <= 8 / 64]
+    samples = crease_points(eq, pairs, box)
+    samples = samples[kink(samples)]
+    assert len(samples) > 50
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 2e-9, d.max()
+    assert np.all(cnt[sel][length <= 8 / 64] == 2)
+    _check_mesh(m, eq, box, closed=False)
+    assert len(np.unique(T)) - len(edges) + len(T) == 1

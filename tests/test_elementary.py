@@ -250,8 +250,8 @@ def test_errors_and_domains():
         ElementarySurface.from_expr(sympy.sin(x) - sympy.Symbol("a"), "sin(x) - a")
     with pytest.raises(SurfaceError, match="constant"):
         ElementarySurface.from_expr(sympy.sin(sympy.Integer(1)) + 0 * x, "sin(1)")
-    with pytest.raises(SurfaceError, match="asin"):
-        ElementarySurface.from_expr(sympy.asin(x) - y, "asin(x) - y")
+    with pytest.raises(SurfaceError, match="unsupported function atan2"):
+        ElementarySurface.from_expr(sympy.atan2(x, y) - z, "atan2(x, y) - z")
     s = ElementarySurface.parse("sqrt(x) - 0.5 + y - y")
     assert np.isnan(s(np.array([-1.0, 0, 0])))
     data = s.enclose(np.array([[-2.0, -1.0], [0, 1], [0, 1]]))
@@ -261,6 +261,27 @@ def test_errors_and_domains():
     assert s.undefined_on(data)[0] == "sqrt(x)"
     with pytest.raises(SurfaceError, match="not a number|not a finite"):
         ElementarySurface.from_expr(x + sympy.log(-1 + 0 * y + sympy.Integer(0)), "log(-1)")
+
+
+def test_inverse_functions_domains():
+    # asin and acos are defined on [-1, 1], acosh on [1, inf), atanh on
+    # (-1, 1) with poles at the ends: no surface outside.
+    s = ElementarySurface.parse("asin(x) + acos(y) - z")
+    assert np.isnan(s(np.array([1.5, 0, 0]))) and np.isnan(s(np.array([0, -1.01, 0])))
+    assert abs(s(np.array([1.0, -1.0, 0])) - 1.5 * np.pi) < 1e-15
+    assert s.excludes_zero(s.enclose(np.array([[1.1, 2.0], [0, 1], [0, 1]]))).all()
+    data = s.enclose(np.array([[0.5, 2.0], [0, 1], [0, 1]]))
+    assert not s.excludes_zero(data).any() and s.simple_axis(data)[0] == -1
+    assert s.undefined_on(data)[0] == "asin(x)"
+    assert s.undefined_on(s.enclose(np.array([[-0.5, 0.9], [0, 1], [0, 1]]))) is None
+    t = ElementarySurface.parse("atanh(x) - y")
+    assert t.undefined_on(t.enclose(np.array([[-1.0, 0.5], [0, 1], [0, 1]])))[0] == "atanh(x)"
+    assert np.isnan(t.taylor(np.array([1.0, 0, 0]), 2)[[0, 1, 2], 0, 0]).all()
+    assert np.isnan(s.taylor(np.array([1.0, 0, 0]), 2)[[0, 1, 2], 0, 0]).all()   # asin'(1) is infinite
+    u = ElementarySurface.parse("acosh(x) - y")
+    assert u.excludes_zero(u.enclose(np.array([[-2.0, 0.99], [-1, 1], [-1, 1]]))).all()
+    row, r = u.line_roots(0, np.array([[0.5, 0.0]]), np.array([-3.0]), np.array([3.0]))
+    assert len(r) == 1 and abs(r[0] - np.cosh(0.5)) < 1e-15
 
 
 def test_jet_of_cosine_bump_on_its_axis():

@@ -12,7 +12,8 @@ import zlib
 import numpy as np
 import pytest
 import sympy
-from sympy import Abs, Max, Min, Rational, cos, cosh, exp, log, sin, sinh, sqrt, tan, tanh
+from sympy import (Abs, Max, Min, Rational, acos, acosh, asin, asinh, atan, atanh, cos, cosh, exp, log, sin, sinh,
+                   sqrt, tan, tanh)
 
 from singmesh.boxes.intervals import Graph, interval_eval
 from singmesh.syntax import X, Y, Z
@@ -29,6 +30,9 @@ EXPRESSIONS = [
     x + y - sqrt(x**2 + y**2), (x**2 - 1) + z + sqrt((x**2 - 1)**2 + z**2),
     (x - y + z - sqrt((x - y)**2 + z**2)) + y + sqrt((x - y + z - sqrt((x - y)**2 + z**2))**2 + y**2),
     sin(x) * cos(y) + sin(y) * cos(z) + sin(z) * cos(x), sin(1 / x), Rational(1, 3) * x - sympy.pi * y,
+    # Inverse functions: monotone, with domain ends at +-1 (boxes centred there).
+    asin(x), acos(x), atan(x), asinh(x), acosh(x), atanh(x / 5), atanh(y - 1 + x**2), asin(x * y / 25) - acos(z / 5), atan(3 * x - y) * z,
+    asin(x**2 + y**2 - 1), acosh(1 + x**2) + atanh(y / 2), asinh(x * y) + atan(1 / z),
 ]
 
 _EPS = np.finfo(float).eps

@@ -5,7 +5,8 @@ from math import factorial
 import numpy as np
 import pytest
 import sympy
-from sympy import Abs, Max, Min, Rational, cos, cosh, exp, log, sin, sinh, sqrt, tan, tanh
+from sympy import (Abs, Max, Min, Rational, acos, acosh, asin, asinh, atan, atanh, cos, cosh, exp, log, sin, sinh,
+                   sqrt, tan, tanh)
 
 from singmesh.elementary import ElementarySurface
 from singmesh.syntax import X, Y, Z
@@ -19,6 +20,8 @@ FUNCTIONS = [
     Max(x**2 + y**2 + z**2 - 1, z - 5), Min(x, y - 7) + z, x**-3 * y - z + 2,
     1 / (1 + exp(-20 * (x**2 + y**2 + z**2 - 1))) - Rational(1, 2),
     (x**2 - 1) + z + sqrt((x**2 - 1)**2 + z**2) - y, sqrt(x**2 + y**2) - 1 + z**2,
+    asin(0.3 * x + 0.2 * y) - z, acos(0.4 * x - 0.3 * z) + y, atan(x * y) - z + atan(2 * z),
+    asinh(x - y) + z, acosh(2 + x**2 - y) - z, atanh(0.4 * x + 0.1 * z) - y,
 ]
 
 
