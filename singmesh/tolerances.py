@@ -302,6 +302,15 @@ CURVE_AVOID = 3.0
 #: are joined at one point of the singular locus between their ends.
 CURVE_JOIN = 3.0
 
+#: Two paths of the curve graph between the same two crossings, each
+#: within this many steps of the other, are one curve at the mesh's
+#: resolution (curves tangent where they meet): the longer goes.  One
+#: step, as for the vertices merged into a crossing (the Tuelle surface's
+#: parabola runs 0.8 steps beside its line there); paths of up to
+#: ``CURVE_DOUBLE_PATH_EDGES`` edges in all, a few steps each way.
+CURVE_DOUBLE_PATH = 1.0
+CURVE_DOUBLE_PATH_EDGES = 24
+
 #: A curve vertex closer than this (in steps) to a special point placed
 #: beside it is merged into the special point.
 CURVE_MERGE = 0.3

@@ -110,3 +110,16 @@ def test_two_cylinders_sheets_near_a_tangential_crossing_stay_apart():
     # the leaves round it (non-simple, outside the ball) joined its two
     # events by an edge of four triangles.
     check_curve_mesh(float_rotated("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", 11), ((-1.5, 1.5),) * 3, 1, coarse=16)
+
+
+TUELLE = "y z (x^2 + y - z)"
+
+
+def test_tuelle_curves_tangent_at_their_triple_point_are_followed_once():
+    # The x-axis and the parabolas z = x^2 (y = 0) and y = -x^2 (z = 0)
+    # meet tangentially at the origin: for about ten steps each way they
+    # are closer than a step.  Seed 18: merging crossings there left two
+    # paths between the same two crossings, one on the line and one on a
+    # parabola 0.8 steps beside it; the strips zipped to both (edges of
+    # three triangles).
+    check_curve_mesh(float_rotated(TUELLE, 18), BOX1, 1)
