@@ -74,7 +74,7 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     b = balls(curves)
     reach = (ball_grow(fine_level) + 2) * cell
     m = balls(curves, MEET_KINDS)
-    meet_reach = (tol.CURVE_MEET_BALL + tol.CURVE_MEET_RIM + 2) * cell
+    meet_reach = (tol.CURVE_MEET_BALL + 2) * cell
     return np.concatenate([
         _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
         _block_regions(box, fine_level, curves.points, curves.edges[wide],
@@ -154,8 +154,7 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     the square of the distance) the tube's radius is ``wide_radius``
     cells, so that the sheets are apart where they leave it.
     Around the points ``meets`` (cuspidal edges crossing) every leaf within
-    ``CURVE_MEET_BALL`` cells is tube, and the non-simple leaves next to
-    that ball join it up to ``CURVE_MEET_RIM`` cells further.
+    ``CURVE_MEET_BALL`` cells is tube.
 
     Returns
     -------
@@ -186,10 +185,6 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
         m = (np.asarray(meets, float).reshape(-1, 3) - tree.box[:, 0]) / tree.cell
         d_meet, _ = cKDTree(m).query(centre, p=np.inf)
         inside |= d_meet <= half + tol.CURVE_MEET_BALL
-        # Where the lens is still thinner than a cell at the ball's rim,
-        # the leaves there fail the simplicity test: those next to the
-        # ball join it (``CURVE_MEET_RIM``).
-        reach |= d_meet <= half + tol.CURVE_MEET_BALL + tol.CURVE_MEET_RIM
     # Leaves that failed the simplicity test next to the tube join it:
     # outside it every leaf must be a union of discs.
     both = (links.minus >= 0) & (links.plus >= 0)

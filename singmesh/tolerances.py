@@ -336,15 +336,6 @@ CURVE_BALL_FINE = 64
 #: cells apart at 0.27, 2 at 24 cells).
 CURVE_MEET_BALL = 24.0
 
-#: The leaves within this many cells beyond that ball that failed the
-#: simplicity test join it: in general position the lens can still be
-#: thinner than a cell across a lattice edge at the rim (a rotated Crixxi:
-#: four non-simple leaves 24.6 to 25.6 cells out paired the two sheets'
-#: events on one lattice edge, an edge of four triangles off the curve).
-#: No further: the strips from rails that far from the curves are too
-#: flat to follow the lens (growing 4 cells left a hole 30 cells out).
-CURVE_MEET_RIM = 2.0
-
 #: The square-free part is computed (sympy, exact) for polynomials with at
 #: most this many terms; beyond, sympy's factoring takes seconds.
 SQUAREFREE_MAX_TERMS = 400

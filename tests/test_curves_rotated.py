@@ -16,7 +16,7 @@ import meshcheck as mc
 from singmesh.facets.triangulate import triangulate_polygons
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.surface import Surface
-from test_curves import BOX1, check_curve_mesh, float_rotated, lambdas, mesh_quiet
+from test_curves import BOX1, check_curve_mesh, float_rotated
 
 ROMAN = "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z"
 
@@ -123,30 +123,3 @@ def test_tuelle_curves_tangent_at_their_triple_point_are_followed_once():
     # parabola 0.8 steps beside it; the strips zipped to both (edges of
     # three triangles).
     check_curve_mesh(float_rotated(TUELLE, 18), BOX1, 1)
-
-
-def test_rotated_crixxi_lens_at_the_rim_of_the_crossing_ball():
-    # Seed 3: 25 cells from where the cuspidal edges cross the two
-    # half-sheets between them are still closer than a cell across a
-    # lattice edge; four non-simple leaves there, just outside the ball
-    # of tube round the crossing, paired one sheet's events with the
-    # other's (an edge of four triangles off the curve).  Checked as
-    # check_curve_mesh does, without its oracle samples (they take minutes
-    # on Crixxi): every edge of more than two triangles has both ends
-    # singular (sympy's gradient), and an even count.
-    text = float_rotated(CRIXXI, 3)
-    box = ((-1.6, 1.6),) * 3
-    m = mesh_quiet(text, box)
-    V, T = m.vertices, m.faces
-    _, G, _, _ = lambdas(text)
-    g = np.linalg.norm(G(V), axis=1)
-    singular = g <= 1e-6 * float(np.median(g[g > 0]))
-    counts = mc.edge_counts(T)
-    many = np.array([e for e, n in counts.items() if n > 2], np.int64).reshape(-1, 2)
-    assert len(many), "no edge along the cuspidal edges' crossing: the case is wrong"
-    assert singular[many].all(), f"{(~singular[many].all(axis=1)).sum()} edges of more than two triangles off the curve"
-    assert all(n % 2 == 0 for n in counts.values() if n > 2)
-    assert mc.boundary_edges_off_box(V, T, box) == []
-    # Crixxi is connected: its sheets z^2 = 1 - y^2 +- (1 - x^2 - y^2)^(3/2)
-    # meet along the cuspidal edges and at (0, +-1, 0).
-    assert mc.components(T) == 1
