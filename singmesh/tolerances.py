@@ -336,6 +336,15 @@ CURVE_BALL_FINE = 64
 #: cells apart at 0.27, 2 at 24 cells).
 CURVE_MEET_BALL = 24.0
 
+#: A rail's step back along the curve followed within this many rail
+#: steps (events, about a cell apart) by a step forward past where it
+#: turned is a zigzag, not a turn (facets.tubes._no_zigzags).  The
+#: excursions round the non-simple leaves joined to the balls reach about
+#: ``ball_grow`` cells (20 at 256 cells per box); a rail that turns round
+#: the end of a curve comes back along all of it.  (Rotated Roman surface:
+#: 12 rail steps left an edge of 8 triangles, 24 none.)
+CURVE_ZIGZAG_STEPS = 24
+
 #: The square-free part is computed (sympy, exact) for polynomials with at
 #: most this many terms; beyond, sympy's factoring takes seconds.
 SQUAREFREE_MAX_TERMS = 400

@@ -16,7 +16,7 @@ import meshcheck as mc
 from singmesh.facets.triangulate import triangulate_polygons
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.surface import Surface
-from test_curves import BOX1, check_curve_mesh, float_rotated
+from test_curves import BOX1, check_curve_mesh, float_rotated, mesh_quiet
 
 ROMAN = "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z"
 
@@ -123,3 +123,17 @@ def test_tuelle_curves_tangent_at_their_triple_point_are_followed_once():
     # parabola 0.8 steps beside it; the strips zipped to both (edges of
     # three triangles).
     check_curve_mesh(float_rotated(TUELLE, 18), BOX1, 1)
+
+
+def test_roman_surface_rails_zip_each_curve_edge_once_per_half_sheet():
+    # Seed 11: round the balls at the triple and pinch points the tube's
+    # wall is not straight, and rails ran back along a double line and
+    # forward again: the strips zipped the same curve edges twice from one
+    # side (four edges of 8 triangles).  At most three sheets pass through
+    # any point of the Roman surface, so no edge has more than 6.  (The
+    # rest of check_curve_mesh runs on this copy in
+    # test_curves.test_float_rotated_and_shifted.)
+    m = mesh_quiet(float_rotated(ROMAN, 11), BOX1)
+    counts = mc.edge_counts(m.faces)
+    assert max(counts.values()) <= 6, sorted(counts.values())[-6:]
+    assert all(n % 2 == 0 for n in counts.values() if n > 2)
