@@ -36,6 +36,11 @@ BALL_KINDS = ("pinch point", "triple point", "crossing of curves", "change of ty
 #: curves inside.
 MEET_KINDS = ("crossing of cuspidal edges",)
 
+#: Special points round which a half-sheet's rail turns back along the
+#: curve it came along (the sheets of a double curve fold into one at a
+#: pinch point): the rails' zigzags are not held near them.
+TURN_KINDS = ("pinch point", "change of type", "end of the trace")
+
 
 def balls(curves, kinds=BALL_KINDS) -> np.ndarray:
     """The special points of a :class:`~singmesh.skeleton.singular_curves.CurveSet` the tube widens around."""
@@ -108,10 +113,19 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     for c in curves.pieces:
         if c.type == "crease":
             steady[np.asarray(c.vertices)] = True
+    # Round the ends of a curve's sheets (a pinch point, where the
+    # double curve's sheets fold into one) a rail turns back along the
+    # curve: no zigzag is held there (see _no_zigzags).
+    turns = np.zeros(len(curves.points), bool)
+    folds = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special) if sp.kind in TURN_KINDS],
+                     np.int64)
+    if len(folds):
+        turns = cKDTree(curves.points[folds]).query(curves.points)[0] <= (
+            tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW) * cell
     return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
-                           steady=steady if steady.any() else None)
+                           steady=steady if steady.any() else None, turns=turns)
 
 
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
@@ -338,7 +352,8 @@ def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = No
 
 def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray, curve_points: np.ndarray,
                     curve_edges: np.ndarray, curve_keys: np.ndarray, box_ends: np.ndarray, reach: float,
-                    box: np.ndarray | None = None, steady: np.ndarray | None = None):
+                    box: np.ndarray | None = None, steady: np.ndarray | None = None,
+                    turns: np.ndarray | None = None):
     """Triangles zipping each rail to the curve.
 
     Parameters
@@ -358,6 +373,10 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         cells off a curve in general position zigzags across the lattice,
         and its nearest curve vertex with it, which would zip one curve
         edge from one side twice.
+    turns : (c,) bool, optional
+        Curve vertices near which a rail may turn back along the curve
+        (pinch points): its steps back there are not taken for zigzags
+        (:func:`_no_zigzags`).
 
     Returns
     -------
@@ -398,6 +417,7 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
                 k0 = int(np.argmin(dist))
                 events, r, snap = np.roll(events, -k0), np.roll(r, -k0, axis=0), np.roll(snap, -k0)
             snap = _steady_snaps(snap, steady, g, closed)
+        snap = _no_zigzags(snap, g, turns)
         m = len(events)
         steps = m if closed else m - 1
         for i in range(steps):
@@ -479,6 +499,53 @@ def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph, closed: boo
             snap[i] = cur
             continue
         cur, came_from = s, int(path[-2])
+    return snap
+
+
+def _no_zigzags(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = None) -> np.ndarray:
+    """The rail's snaps without its excursions back along the curve and forward again.
+
+    Where the tube's wall is not straight (the non-simple leaves joined to
+    the balls round pinch and triple points, a wall in general position) a
+    rail can run a few cells back along the curve and then forward past
+    where it turned: its nearest curve vertices go back and forth, and the
+    strip zips the same curve edges two or three times from one side
+    (edges of 6 or 8 triangles where two sheets cross).  A step back
+    along the edge the rail last came along is held at the vertex it
+    left when the rail comes forward past that vertex again within
+    ``CURVE_ZIGZAG_STEPS`` steps; otherwise it is a turn (round the end of
+    a curve, or onto another curve through a crossing) and is kept, as
+    is every step back from a vertex flagged in ``turns``.
+    """
+    snap = np.array(snap)
+    n = len(snap)
+
+    def first_step(a: int, b: int) -> int:
+        try:
+            return nx.shortest_path(g, a, b, weight="weight")[1]
+        except nx.NetworkXNoPath:
+            return b
+
+    cur, came_from = int(snap[0]), -1
+    i = 1
+    while i < n:
+        s = int(snap[i])
+        if s == cur:
+            i += 1
+            continue
+        try:
+            path = nx.shortest_path(g, cur, s, weight="weight")
+        except nx.NetworkXNoPath:
+            path = [cur, s]
+        if came_from >= 0 and path[1] == came_from and not (turns is not None and turns[cur]):
+            ahead = [j for j in range(i + 1, min(n, i + 1 + tol.CURVE_ZIGZAG_STEPS))
+                     if int(snap[j]) != cur and first_step(cur, int(snap[j])) != came_from]
+            if ahead:
+                snap[i:ahead[0]] = cur
+                i = ahead[0]
+                continue
+        cur, came_from = s, int(path[-2])
+        i += 1
     return snap
 
 

@@ -339,6 +339,15 @@ CURVE_AVOID = 3.0
 #: are joined at one point of the singular locus between their ends.
 CURVE_JOIN = 3.0
 
+#: Two paths of the curve graph between the same two crossings, each
+#: within this many steps of the other, are one curve at the mesh's
+#: resolution (curves tangent where they meet): the longer goes.  One
+#: step, as for the vertices merged into a crossing (the Tuelle surface's
+#: parabola runs 0.8 steps beside its line there); paths of up to
+#: ``CURVE_DOUBLE_PATH_EDGES`` edges in all, a few steps each way.
+CURVE_DOUBLE_PATH = 1.0
+CURVE_DOUBLE_PATH_EDGES = 24
+
 #: A curve vertex closer than this (in steps) to a special point placed
 #: beside it is merged into the special point.
 CURVE_MERGE = 0.3
@@ -363,6 +372,15 @@ CURVE_BALL_FINE = 64
 #: distance, closer than the octree can part (Crixxi at 256 cells: 1.6
 #: cells apart at 0.27, 2 at 24 cells).
 CURVE_MEET_BALL = 24.0
+
+#: A rail's step back along the curve followed within this many rail
+#: steps (events, about a cell apart) by a step forward past where it
+#: turned is a zigzag, not a turn (facets.tubes._no_zigzags).  The
+#: excursions round the non-simple leaves joined to the balls reach about
+#: ``ball_grow`` cells (20 at 256 cells per box); a rail that turns round
+#: the end of a curve comes back along all of it.  (Rotated Roman surface:
+#: 12 rail steps left an edge of 8 triangles, 24 none.)
+CURVE_ZIGZAG_STEPS = 24
 
 #: The square-free part is computed (sympy, exact) for polynomials with at
 #: most this many terms; beyond, sympy's factoring takes seconds.

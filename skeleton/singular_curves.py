@@ -754,6 +754,7 @@ def _graph(polylines: list, surface: Surface, h: float):
     E = remap[E]
     E = E[E[:, 0] != E[:, 1]]
     E = _drop_chords(P, np.unique(np.sort(E, axis=1), axis=0))
+    E = _drop_doubled_paths(P, E, h)
     used = np.zeros(len(P), bool)
     used[E.ravel()] = True
     new = np.cumsum(used) - 1
@@ -798,6 +799,68 @@ def _drop_chords(P: np.ndarray, E: np.ndarray) -> np.ndarray:
             return E
         E = E[~drop]
     return E
+
+
+def _drop_doubled_paths(P: np.ndarray, E: np.ndarray, h: float) -> np.ndarray:
+    """The curve graph's edges (m, 2) without the longer of two paths that run within a step of each other.
+
+    Curves tangent where they meet (the Tuelle surface's three curves at
+    its triple point) run closer than a step for many steps: merging
+    crossings there can leave two paths between the same two crossings,
+    one on each curve, less than a step apart: one curve at the mesh's
+    resolution.  The strips zip to both (edges of three triangles).  A
+    cycle of the graph with just two vertices of degree above two, whose
+    two paths between them are each within ``CURVE_DOUBLE_PATH`` steps of
+    the other, loses the longer path.  Two curves that really part (two
+    circles crossing twice) are further apart than that.
+    """
+    if len(E) < 2:
+        return E
+    g = nx.Graph()
+    g.add_edges_from(E.tolist())
+    reach = tol.CURVE_DOUBLE_PATH * h
+    drop = set()
+    changed = True
+    while changed:
+        changed = False
+        for cycle in sorted(nx.cycle_basis(g), key=lambda c: (len(c), min(c))):
+            if len(cycle) > tol.CURVE_DOUBLE_PATH_EDGES:
+                continue
+            branch = [i for i, v in enumerate(cycle) if g.degree(v) > 2]
+            if len(branch) != 2:
+                continue
+            i, j = branch
+            one = cycle[i:j + 1]
+            two = cycle[j:] + cycle[:i + 1]
+            if len(one) < 3 and len(two) < 3:
+                continue
+            arc = [float(np.linalg.norm(np.diff(P[q], axis=0), axis=1).sum()) for q in (one, two)]
+            near = [float(_point_polyline_distance(P[q[1:-1]], P[r]).max(initial=0.0))
+                    for q, r in ((one, two), (two, one))]
+            if max(near) > reach:
+                continue
+            longer = one if (arc[0], len(one)) > (arc[1], len(two)) else two
+            edges = list(zip(longer[:-1], longer[1:]))
+            g.remove_edges_from(edges)
+            g.remove_nodes_from([v for v in longer[1:-1] if g.degree(v) == 0])
+            drop.update((min(a, b), max(a, b)) for a, b in edges)
+            changed = True
+            break
+    if not drop:
+        return E
+    keep = np.array([(int(a), int(b)) not in drop for a, b in E.tolist()], bool)
+    return E[keep]
+
+
+def _point_polyline_distance(x: np.ndarray, line: np.ndarray) -> np.ndarray:
+    """Distance from each point of x (k, 3) to the polyline through ``line`` (n, 3)."""
+    if len(x) == 0:
+        return np.zeros(0)
+    a, b = line[:-1], line[1:]
+    d = b - a
+    dd = np.maximum((d * d).sum(axis=1), 1e-300)
+    t = np.clip(((x[:, None, :] - a) * d).sum(axis=2) / dd, 0.0, 1.0)
+    return np.linalg.norm(x[:, None, :] - (a + t[..., None] * d), axis=2).min(axis=1)
 
 
 # ---------------------------------------------------------------- types

@@ -16,7 +16,7 @@ import meshcheck as mc
 from singmesh.facets.triangulate import triangulate_polygons
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.surface import Surface
-from test_curves import BOX1, check_curve_mesh, float_rotated
+from test_curves import BOX1, check_curve_mesh, float_rotated, mesh_quiet
 
 ROMAN = "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z"
 
@@ -110,3 +110,30 @@ def test_two_cylinders_sheets_near_a_tangential_crossing_stay_apart():
     # the leaves round it (non-simple, outside the ball) joined its two
     # events by an edge of four triangles.
     check_curve_mesh(float_rotated("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", 11), ((-1.5, 1.5),) * 3, 1, coarse=16)
+
+
+TUELLE = "y z (x^2 + y - z)"
+
+
+def test_tuelle_curves_tangent_at_their_triple_point_are_followed_once():
+    # The x-axis and the parabolas z = x^2 (y = 0) and y = -x^2 (z = 0)
+    # meet tangentially at the origin: for about ten steps each way they
+    # are closer than a step.  Seed 18: merging crossings there left two
+    # paths between the same two crossings, one on the line and one on a
+    # parabola 0.8 steps beside it; the strips zipped to both (edges of
+    # three triangles).
+    check_curve_mesh(float_rotated(TUELLE, 18), BOX1, 1)
+
+
+def test_roman_surface_rails_zip_each_curve_edge_once_per_half_sheet():
+    # Seed 11: round the balls at the triple and pinch points the tube's
+    # wall is not straight, and rails ran back along a double line and
+    # forward again: the strips zipped the same curve edges twice from one
+    # side (four edges of 8 triangles).  At most three sheets pass through
+    # any point of the Roman surface, so no edge has more than 6.  (The
+    # rest of check_curve_mesh runs on this copy in
+    # test_curves.test_float_rotated_and_shifted.)
+    m = mesh_quiet(float_rotated(ROMAN, 11), BOX1)
+    counts = mc.edge_counts(m.faces)
+    assert max(counts.values()) <= 6, sorted(counts.values())[-6:]
+    assert all(n % 2 == 0 for n in counts.values() if n > 2)
