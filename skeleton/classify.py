@@ -281,6 +281,11 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
     """
     # Taylor polynomial at p (exact up to rounding: no truncation).
     T = s.taylor(p)
+    if not np.isfinite(T).all():
+        # (a root of a sum of squares vanishing there: the apex of
+        # sqrt(x^2 + y^2) = |z|; mesh() places such points as tips)
+        raise SurfaceError(f"F is not differentiable at ({', '.join(f'{c:.10g}' for c in p)}): "
+                           "it has no Taylor jet to classify")
     deg = degree_grid(3, T.shape[0] - 1)
     S = float(np.max(np.abs(T[deg >= 2]), initial=0.0))
     _check_singular(s, p, T, S)

@@ -102,3 +102,11 @@ def test_no_tip_where_the_root_does_not_vanish_on_the_surface():
     m = singmesh.mesh(s, [[-1.5, 1.5]] * 3)
     assert m.singularities == [] and mc.euler(m.vertices, m.faces) == 0
     assert singmesh.Surface.parse("x^2 + y^2 - z^2").tip_systems() == []
+
+
+def test_classifying_a_tip_says_it_has_no_jet():
+    from singmesh.errors import SurfaceError
+    from singmesh.skeleton.classify import classify
+
+    with pytest.raises(SurfaceError, match="not differentiable at"):
+        classify("sqrt(x^2 + y^2) - abs(z - 0.1)", (0.0, 0.0, 0.1))
