@@ -74,6 +74,27 @@ class CreaseSystem(abc.ABC):
         """(N,) bool on a stack of boxes (the surface's ``data``): G1 and G2 may both vanish there."""
 
 
+def boxes_where(surface: "Surface", box: np.ndarray, level: int, keep) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes at ``level`` of ``box`` kept at every level by ``keep(data) -> (N,) bool``.
+
+    Returns
+    -------
+    data : the surface's data on the boxes kept
+    corner : (K, 3) int64   their lower corners in units of the level's box
+    """
+    data = surface.enclose(box)
+    corner = np.zeros((1, 3), np.int64)
+    for _ in range(level):
+        children = surface.split(data)
+        data = children.reshape((-1,) + children.shape[2:])
+        corner = (2 * corner[:, None, :] + CHILD_OFFSETS[None]).reshape(-1, 3)
+        k = keep(data)
+        data, corner = data[k], corner[k]
+        if len(corner) == 0:
+            break
+    return data, corner
+
+
 class TipSystem(abc.ABC):
     """Where F is continuous but not differentiable at isolated points of its zero set.
 

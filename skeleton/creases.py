@@ -36,7 +36,7 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
-from singmesh.surface import CHILD_OFFSETS, CreaseSystem, Surface
+from singmesh.surface import CreaseSystem, Surface, boxes_where
 
 from .singular_curves import CurveSet, SingularCurve, SpecialPoint, back_at_start
 
@@ -93,16 +93,9 @@ def _tangent(system: CreaseSystem, x: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------- samples
 def crease_samples(surface: Surface, system: CreaseSystem, box: np.ndarray, level: int) -> np.ndarray:
     """Points of the active crease near the boxes at ``level`` where G1, G2 and F may vanish."""
-    data = surface.enclose(box)
-    corner = np.zeros((1, 3), np.int64)
-    for _ in range(level):
-        children = surface.split(data)
-        data = children.reshape((-1,) + children.shape[2:])
-        corner = (2 * corner[:, None, :] + CHILD_OFFSETS[None]).reshape(-1, 3)
-        keep = system.may_vanish(data) & ~surface.excludes_zero(data)
-        data, corner = data[keep], corner[keep]
-        if len(corner) == 0:
-            return np.zeros((0, 3))
+    _, corner = boxes_where(surface, box, level, lambda d: system.may_vanish(d) & ~surface.excludes_zero(d))
+    if len(corner) == 0:
+        return np.zeros((0, 3))
     size = (box[:, 1] - box[:, 0]) / (1 << level)
     start = box[:, 0] + (corner + 0.5) * size
     x, ok = _newton(system, start, 2.0 * float(size.max()))

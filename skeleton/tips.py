@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
-from singmesh.surface import CHILD_OFFSETS, Surface
+from singmesh.surface import Surface, boxes_where
 
 from .classify import SingularityType
 from .points import SingularPoint
@@ -46,16 +46,7 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
     size = box[:, 1] - box[:, 0]
     found, names = [], []
     for system in surface.tip_systems():
-        data = surface.enclose(box)
-        corner = np.zeros((1, 3), np.int64)
-        for _ in range(level):
-            children = surface.split(data)
-            data = children.reshape((-1,) + children.shape[2:])
-            corner = (2 * corner[:, None, :] + CHILD_OFFSETS[None]).reshape(-1, 3)
-            keep = system.may_vanish(data)
-            data, corner = data[keep], corner[keep]
-            if len(corner) == 0:
-                break
+        _, corner = boxes_where(surface, box, level, system.may_vanish)
         if len(corner) == 0:
             continue
         x = box[:, 0] + (corner + 0.5) * size / (1 << level)

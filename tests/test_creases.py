@@ -153,6 +153,17 @@ def _edges(T):
     return np.unique(e, axis=0, return_counts=True)
 
 
+def _crease_edges(V, T, pairs, size, cells):
+    """Mesh edges with both ends on a crease (to 1e-10 of the box) and at most 4 fine cells long
+    (consecutive crease vertices, not a chord across a flat piece): edges, triangle counts, lengths."""
+    on = _on_crease(V, pairs, 1e-10 * size)
+    edges, cnt = _edges(T)
+    sel = on[edges[:, 0]] & on[edges[:, 1]]
+    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
+    near = length <= 4 * size / cells
+    return edges[sel][near], cnt[sel][near], length[near]
+
+
 def _mesh(name):
     case = next(c for c in CASES if c[0] == name)
     return singmesh.mesh(case[1], box=[[-case[2], case[2]]] * 3)
@@ -165,19 +176,12 @@ def test_crease_followed_by_edges(case):
     size = 2 * r
     m = _mesh(name)
     V, T = m.vertices, m.faces
-    on = _on_crease(V, pairs, 1e-10 * size)
-    edges, cnt = _edges(T)
-    sel = on[edges[:, 0]] & on[edges[:, 1]]
-    crease_edges, counts = edges[sel], cnt[sel]
-    # Consecutive crease vertices (not a chord across a flat piece).
-    length = np.linalg.norm(V[crease_edges[:, 0]] - V[crease_edges[:, 1]], axis=1)
-    near = length <= 4 * size / 256
-    crease_edges, counts = crease_edges[near], counts[near]
+    crease_edges, counts, length = _crease_edges(V, T, pairs, size, 256)
     assert len(crease_edges) > 50
     samples = crease_points(eq, pairs, box)
     assert len(samples) > 50
     d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
-    longest = float(length[length <= 4 * size / 256].max())
+    longest = float(length.max())
     sagitta = 0.0 if np.isinf(radius) else longest ** 2 / (8 * radius) * 1.01
     assert d.max() <= sagitta + 1e-9 * size, (d.max(), sagitta)
     # Each edge along the crease has its two half-sheets' triangles.
@@ -258,21 +262,17 @@ def test_close_creases_raise_the_fine_level():
     pairs = CUBE_PAIRS + [(f"z{s}0.7", f"{hole}-{r}**2") for s in "+-"]
     V, T = m.vertices, m.faces
     size = 2.0
-    on = _on_crease(V, pairs, 1e-10 * size)
-    edges, cnt = _edges(T)
-    sel = on[edges[:, 0]] & on[edges[:, 1]]
-    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
-    near = length <= 4 * size / 128
-    crease_edges, counts = edges[sel][near], cnt[sel][near]
+    crease_edges, counts, length = _crease_edges(V, T, pairs, size, 128)
     samples = crease_points(eq, pairs, box, starts=1400)
     assert len(samples) > 100
     d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
-    sagitta = float(length[near].max()) ** 2 / (8 * r) * 1.01
+    sagitta = float(length.max()) ** 2 / (8 * r) * 1.01
     assert d.max() <= sagitta + 1e-9 * size, d.max()
     assert np.all(counts == 2), np.bincount(counts)
     assert np.linalg.norm(V[None] - CUBE_CORNERS[:, None], axis=2).min(axis=1).max() <= 1e-12 * size
     # Closed, of genus 1 (the checks for a sphere's closed=True aside).
     _check_mesh(m, eq, box, closed=False)
+    edges, cnt = _edges(T)
     assert (cnt == 1).sum() == 0 and (cnt > 2).sum() == 0
     assert len(np.unique(T)) - len(edges) + len(T) == 0
     assert m.stats["creases"] == 14
@@ -298,12 +298,7 @@ def test_crease_ending_inside_the_box(eq, pairs, fade_vertex):
     size = 2.0
     m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
     V, T = m.vertices, m.faces
-    on = _on_crease(V, pairs, 1e-10 * size)
-    edges, cnt = _edges(T)
-    sel = on[edges[:, 0]] & on[edges[:, 1]]
-    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
-    near = length <= 4 * size / 64
-    crease_edges, counts = edges[sel][near], cnt[sel][near]
+    crease_edges, counts, length = _crease_edges(V, T, pairs, size, 64)
     # Crease samples where the kink is there (v > 0 for |u|'s), a little
     # away from where it fades: on mesh edges.
     v_of = _numpy(_expr(_V))
@@ -319,10 +314,10 @@ def test_crease_ending_inside_the_box(eq, pairs, fade_vertex):
     dist = np.linalg.norm(V - _FADE, axis=1)
     assert dist.min() <= (1e-12 if fade_vertex else 1e-2) * size
     end = int(np.argmin(dist))
-    assert on[end]
+    assert _on_crease(V[end:end + 1], pairs, 1e-10 * size)[0]
     assert mc.fans_at(T, end) == 1 and mc.fans_are_closed(T, end)
     _check_mesh(m, eq, box, closed=False)
-    assert len(np.unique(T)) - len(edges) + len(T) == 1
+    assert len(np.unique(T)) - len(_edges(T)[0]) + len(T) == 1
 
 
 @pytest.mark.parametrize("eq, pairs, kink", [
