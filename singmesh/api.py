@@ -24,11 +24,11 @@ from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
 from singmesh.skeleton.singular_curves import singular_curves
-from singmesh.skeleton.tips import tip_points
+from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .mesh import EmptyMeshWarning, Mesh, SingularPointWarning
+from .mesh import CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
 
@@ -140,6 +140,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         curves = singular_curves(surf, b, step=float(cell.max()))
         creases = crease_curves(surf, b, step=float(cell.max()))
     curves = merge_curve_sets(curves, creases)
+    # A root of |u| along a curve of the surface (|x|^0.5 + ...) is a
+    # cuspidal crease that is not traced: said, not silently meshed wrong.
+    unfollowed = [(name, p.tolist()) for name, p in root_creases(surf, b)]
     t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
     # Points on the curves are their special points (pinch and triple
@@ -236,6 +239,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "creases": len(creases),
         "untraced_curve": bool(overflow),
         "repeated_factors": repeated,
+        "unfollowed_creases": unfollowed,
         "overlapping_stars": len(clashes),
         "fine": 1 << fine_level,
         # Distance (fine cells) of the two closest creases, where closer
@@ -250,6 +254,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
+    for note in m.notes():
+        if note.startswith("F is not differentiable along"):
+            warnings.warn(note, CreaseWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     return m

@@ -555,6 +555,23 @@ class ElementarySurface(Surface):
             self._tip_systems = out
         return self._tip_systems
 
+    def root_crease_systems(self) -> list[TipSystem]:
+        """sqrt and powers 0 < p < 1 of |u| or u^2: vanishing along a curve of the surface (cuspidal creases)."""
+        if getattr(self, "_root_creases", None) is None:
+            g, f = self._graph, self._f
+            out = []
+            for n in g.plan([f]):
+                op, p = g.ops[n], g.params[n]
+                if op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0):
+                    a = g.args[n][0]
+                    squares = g._squares(a)
+                    base = g.args[a][0] if g.ops[a] == "abs" else (squares[0] if squares and len(squares) == 1 else None)
+                    if base is not None:
+                        out.append(_Tip(self, f"{op} of |u| or u^2 (u = 0 on a surface)",
+                                        [g.substitute(f, n, g.zero), base]))
+            self._root_creases = out
+        return self._root_creases
+
     def _pole_line(self):
         """The curve where the surface runs into a pole of F = N / D, as a crease system (N, D), or None.
 

@@ -26,6 +26,10 @@ class SingularPointWarning(UserWarning):
     """A singular point is not meshed as it is (not a vertex, or wrong branches)."""
 
 
+class CreaseWarning(UserWarning):
+    """A curve where F = 0 is not smooth (a root of |u| vanishing along it) is not followed by the mesh."""
+
+
 class EmptyMeshWarning(UserWarning):
     """The mesh has no triangle: the surface does not meet the box (the warning says why)."""
 
@@ -228,6 +232,12 @@ class Mesh:
         if self.stats.get("untraced_curve"):
             out.append("F has a curve of singular points in the box that could not be traced; "
                        "near it the mesh is not right")
+        roots = self.stats.get("unfollowed_creases", [])
+        if roots:
+            name, p = roots[0]
+            out.append(f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
+                       f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})): "
+                       "the mesh does not follow them and is not right near them")
         for factor, k in self.stats.get("repeated_factors", []):
             out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
                        "(a repeated factor does not change sign, so its zeros are all singular)")

@@ -344,6 +344,10 @@ class Surface(abc.ABC):
         """Roots of sums of squares in F, whose zeros on the surface are not smooth points (none for a polynomial)."""
         return []
 
+    def root_crease_systems(self) -> list[TipSystem]:
+        """Roots of |u| or u^2 in F, whose zeros on the surface are curves where it is not smooth (none for a polynomial)."""
+        return []
+
     # ------------------------------------------------------------ on lines
     @abc.abstractmethod
     def line_roots(self, axis: int, fixed: np.ndarray, s0: np.ndarray,

@@ -46,29 +46,9 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
     size = box[:, 1] - box[:, 0]
     found, names = [], []
     for system in surface.tip_systems():
-        _, corner = boxes_where(surface, box, level, system.may_vanish)
-        if len(corner) == 0:
-            continue
-        x = box[:, 0] + (corner + 0.5) * size / (1 << level)
-        for _ in range(tol.TIP_NEWTON_STEPS):
-            r, j = system.values(x)
-            good = np.isfinite(r).all(axis=1) & np.isfinite(j).all(axis=(1, 2))
-            step = np.zeros_like(x)
-            step[good] = np.einsum("kij,kj->ki", np.linalg.pinv(j[good], rcond=1e-12), r[good])
-            x = np.where(good[:, None], x - step, np.nan)
-        r, j = system.values(x)
-        scale = np.maximum(np.abs(j).max(axis=(1, 2)), 1.0) * float(size.max())
-        ok = np.isfinite(x).all(axis=1) & (np.abs(r).max(axis=1) <= tol.TIP_RESIDUAL * scale)
-        ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
-        ok[ok] = surface.is_zero(x[ok]) | (np.abs(surface(x[ok])) <= tol.TIP_RESIDUAL * scale[ok])
-        # The root must make F non-differentiable there: F - F0 grows like
-        # the root (t, t^(2/3)) away from the point, not like t^2 (as
-        # cos(k sqrt(u)) - 1, analytic in u, on seed 000's cosine bump,
-        # whose axis point is a smooth or ADE point of its own).
-        if ok.any():
-            ok[ok] = _kinked(surface, system, x[ok], tol.TIP_PROBE * float(size.max()))
-        found.append(x[ok])
-        names += [system.name] * int(ok.sum())
+        x = _kinked_zeros(surface, system, box, level)
+        found.append(x)
+        names += [system.name] * len(x)
     if not found or not sum(len(f) for f in found):
         return []
     x = np.concatenate(found)
@@ -84,6 +64,51 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
                                note=f"F is not differentiable here (a {name} vanishes): not an ADE point")
         out.append(SingularPoint(point=p, residual=float(abs(surface(p[None])[0])), hessian_rank=0,
                                  signature=(0, 0, 3), classification=kind))
+    return out
+
+
+def _kinked_zeros(surface: Surface, system, box: np.ndarray, level: int) -> np.ndarray:
+    """Common zeros (k, 3) of the system's equations on F = 0 in ``box`` where the root kinks F.
+
+    Gauss-Newton (minimum-norm steps) from the centres of the boxes at
+    ``level`` where all the equations may vanish.
+    """
+    size = box[:, 1] - box[:, 0]
+    _, corner = boxes_where(surface, box, level, system.may_vanish)
+    if len(corner) == 0:
+        return np.zeros((0, 3))
+    x = box[:, 0] + (corner + 0.5) * size / (1 << level)
+    for _ in range(tol.TIP_NEWTON_STEPS):
+        r, j = system.values(x)
+        good = np.isfinite(r).all(axis=1) & np.isfinite(j).all(axis=(1, 2))
+        step = np.zeros_like(x)
+        step[good] = np.einsum("kij,kj->ki", np.linalg.pinv(j[good], rcond=1e-12), r[good])
+        x = np.where(good[:, None], x - step, np.nan)
+    r, j = system.values(x)
+    scale = np.maximum(np.abs(j).max(axis=(1, 2)), 1.0) * float(size.max())
+    ok = np.isfinite(x).all(axis=1) & (np.abs(r).max(axis=1) <= tol.TIP_RESIDUAL * scale)
+    ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
+    ok[ok] = surface.is_zero(x[ok]) | (np.abs(surface(x[ok])) <= tol.TIP_RESIDUAL * scale[ok])
+    # The root must make F non-differentiable there: F - F0 grows like
+    # the root (t, t^(2/3)) away from the point, not like t^2 (as
+    # cos(k sqrt(u)) - 1, analytic in u, on seed 000's cosine bump,
+    # whose axis point is a smooth or ADE point of its own).
+    if ok.any():
+        ok[ok] = _kinked(surface, system, x[ok], tol.TIP_PROBE * float(size.max()))
+    return x[ok]
+
+
+def root_creases(surface: Surface, box, level: int = 6) -> list[tuple[str, np.ndarray]]:
+    """Roots in F that vanish along a curve of F = 0 (a cuspidal crease): (name, a point of it) each.
+
+    Not meshed as creases (the mesh near them is not right): :func:`singmesh.mesh` says so.
+    """
+    box = np.asarray(box, dtype=float)
+    out = []
+    for system in surface.root_crease_systems():
+        x = _kinked_zeros(surface, system, box, level)
+        if len(x):
+            out.append((system.name, x[np.lexsort(x.T[::-1])][0]))
     return out
 
 

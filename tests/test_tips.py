@@ -110,3 +110,30 @@ def test_classifying_a_tip_says_it_has_no_jet():
 
     with pytest.raises(SurfaceError, match="not differentiable at"):
         classify("sqrt(x^2 + y^2) - abs(z - 0.1)", (0.0, 0.0, 0.1))
+
+
+@pytest.mark.parametrize("text, count", [
+    ("abs(x)^0.5 + abs(y)^0.5 + abs(z)^0.5 - 1", 3),   # the star superquadric: 3 planes of cusps
+    ("sqrt(abs(x - 0.1)) + y^2 + z^2 - 0.5", 1),
+])
+def test_a_root_vanishing_along_a_curve_is_said(text, count):
+    # |u|^p (p < 1) vanishing along a curve of the surface makes a cuspidal
+    # crease that is not traced: the mesh must say so, not look right.
+    with pytest.warns(singmesh.CreaseWarning, match="not differentiable along .* curve"):
+        m = singmesh.mesh(text, [[-1.2, 1.2]] * 3, coarse=16, fine=64)
+    roots = m.stats["unfollowed_creases"]
+    assert len(roots) == count
+    for _, p in roots:
+        # Each point is on the surface and on the plane where the root's argument vanishes.
+        assert abs(float(m.surface(np.array([p]))[0])) < 1e-9
+
+
+@pytest.mark.parametrize("text", ["abs(x)^2.5 + abs(y)^2.5 + abs(z)^3 - 1", "sqrt(x) + y - 0.5",
+                                  "sqrt(x^2 + y^2) - abs(z)"])
+def test_no_crease_warning_where_the_surface_is_smooth_or_followed(text):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", singmesh.CreaseWarning)
+        m = singmesh.mesh(text, [[-1.2, 1.2]] * 3, coarse=16, fine=64)
+    assert m.stats["unfollowed_creases"] == []
