@@ -582,6 +582,12 @@ class ElementarySurface(Surface):
         """
         if not self._poles:
             return None
+        # Rational F only: sympy's cancel of a sum of sigmoids 1/(1 + exp(...))
+        # with float coefficients runs for many minutes (heuristic gcds of
+        # huge expressions), and their denominators have no zeros anyway.
+        # Other poles (tan, 1/sin) keep the documented gap of a cell.
+        if not self.expr.is_rational_function(*sorted(self.expr.free_symbols, key=str)):
+            return None
         try:
             # cancel: a common factor of N and D (x^2 - y^2 over x - y) would
             # make N = D = 0 a surface, not a line.
