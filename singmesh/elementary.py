@@ -545,8 +545,14 @@ class ElementarySurface(Surface):
         if getattr(self, "_tip_systems", None) is None:
             g, f = self._graph, self._f
             out = []
-            for n in g.plan([f]):
+            plan = g.plan([f])
+            # An R-function's root sqrt(f^2 + g^2) vanishes along its crease
+            # f = g = 0 (a curve, traced as a crease), not at points.
+            rfun_roots = {g.args[n][2] for n in plan if g.ops[n] == "rfun"}
+            for n in plan:
                 op, p = g.ops[n], g.params[n]
+                if n in rfun_roots:
+                    continue
                 if op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0):
                     squares = g._squares(g.args[n][0])
                     if squares and 2 <= len(squares) <= 3:

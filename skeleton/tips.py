@@ -23,6 +23,7 @@ are coned to the point; the classification says what they are.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
 from singmesh.surface import Surface, boxes_where
@@ -54,11 +55,14 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
     x = np.concatenate(found)
     order = np.lexsort(x.T[::-1])
     x, names = x[order], [names[i] for i in order]
-    keep, out = [], []
-    for p, name in zip(x, names):
-        if any(np.linalg.norm(p - q) <= tol.SINGULAR_MERGE * size.max() for q in keep):
+    out = []
+    merge = tol.SINGULAR_MERGE * float(size.max())
+    tree = cKDTree(x)
+    taken = np.zeros(len(x), bool)
+    for i, (p, name) in enumerate(zip(x, names)):
+        if taken[i]:
             continue
-        keep.append(p)
+        taken[tree.query_ball_point(p, merge)] = True
         kind = SingularityType(name=TIP, real_form=None, corank=3, milnor=None, branches=None, axis=None,
                                hessian_signature=(0, 0, 3), jet="", point=tuple(float(c) for c in p),
                                note=f"F is not differentiable here (a {name} vanishes): not an ADE point")
