@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
@@ -235,9 +237,6 @@ def _fill_holes(tree: Octree, links, inside: np.ndarray) -> np.ndarray:
     both = (minus >= 0) & (plus >= 0)
     a, b = minus[both], plus[both]
     join = out[a] & out[b]
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     _, label = connected_components(coo_matrix((np.ones(int(join.sum())), (a[join], b[join])), shape=(n, n)),
                                     directed=False)
     # Groups that reach the box's boundary (a link square with one side

@@ -254,9 +254,8 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
-    for note in m.notes():
-        if note.startswith("F is not differentiable along"):
-            warnings.warn(note, CreaseWarning, stacklevel=3)
+    for note in m.crease_warnings():
+        warnings.warn(note, CreaseWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     return m

@@ -542,41 +542,39 @@ class ElementarySurface(Surface):
 
     def tip_systems(self) -> list[TipSystem]:
         """sqrt and powers 0 < p < 1 of sums of two or three squares: :class:`TipSystem` each."""
-        if getattr(self, "_tip_systems", None) is None:
-            g, f = self._graph, self._f
-            out = []
-            plan = g.plan([f])
-            # An R-function's root sqrt(f^2 + g^2) vanishes along its crease
-            # f = g = 0 (a curve, traced as a crease), not at points.
-            rfun_roots = {g.args[n][2] for n in plan if g.ops[n] == "rfun"}
-            for n in plan:
-                op, p = g.ops[n], g.params[n]
-                if n in rfun_roots:
-                    continue
-                if op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0):
-                    squares = g._squares(g.args[n][0])
-                    if squares and 2 <= len(squares) <= 3:
-                        out.append(_Tip(self, f"{op} of a sum of {len(squares)} squares",
-                                        [g.substitute(f, n, g.zero)] + list(squares)))
-            self._tip_systems = out
-        return self._tip_systems
+        return self._roots()[0]
 
     def root_crease_systems(self) -> list[TipSystem]:
         """sqrt and powers 0 < p < 1 of |u| or u^2: vanishing along a curve of the surface (cuspidal creases)."""
-        if getattr(self, "_root_creases", None) is None:
+        return self._roots()[1]
+
+    def _roots(self) -> tuple[list, list]:
+        """The roots in F that make it non-differentiable where they vanish: (tips, cuspidal creases).
+
+        A root of a sum of two or three squares vanishes on a line or a
+        point (tips where that meets F = 0); a root of |u| or u^2 on a
+        surface (a curve of F = 0).  An R-function's own root vanishes
+        along its crease, traced as one: neither.
+        """
+        if getattr(self, "_root_systems", None) is None:
             g, f = self._graph, self._f
-            out = []
-            for n in g.plan([f]):
+            tips, creases = [], []
+            plan = g.plan([f])
+            rfun_roots = {g.args[n][2] for n in plan if g.ops[n] == "rfun"}
+            for n in plan:
                 op, p = g.ops[n], g.params[n]
-                if op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0):
-                    a = g.args[n][0]
-                    squares = g._squares(a)
-                    base = g.args[a][0] if g.ops[a] == "abs" else (squares[0] if squares and len(squares) == 1 else None)
-                    if base is not None:
-                        out.append(_Tip(self, f"{op} of |u| or u^2 (u = 0 on a surface)",
-                                        [g.substitute(f, n, g.zero), base]))
-            self._root_creases = out
-        return self._root_creases
+                if n in rfun_roots or not (op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0)):
+                    continue
+                a = g.args[n][0]
+                squares = g._squares(a) or []
+                f0 = g.substitute(f, n, g.zero)  # F where the root vanishes
+                if 2 <= len(squares) <= 3:
+                    tips.append(_Tip(self, f"{op} of a sum of {len(squares)} squares", [f0] + list(squares)))
+                elif g.ops[a] == "abs" or len(squares) == 1:
+                    base = g.args[a][0] if g.ops[a] == "abs" else squares[0]
+                    creases.append(_Tip(self, f"{op} of |u| or u^2 (u = 0 on a surface)", [f0, base]))
+            self._root_systems = (tips, creases)
+        return self._root_systems
 
     def _pole_line(self):
         """The curve where the surface runs into a pole of F = N / D, as a crease system (N, D), or None.

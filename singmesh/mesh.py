@@ -226,18 +226,23 @@ class Mesh:
                                                 for s in wrong[:5]) + (" ..." if len(wrong) > 5 else ""))
         return out
 
+    def crease_warnings(self) -> list[str]:
+        """Curves where F = 0 is not smooth that the mesh does not follow (roots of |u|): one line, or none."""
+        roots = self.stats.get("unfollowed_creases", [])
+        if not roots:
+            return []
+        name, p = roots[0]
+        return [f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
+                f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})): "
+                "the mesh does not follow them and is not right near them"]
+
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""
         out = self.singular_point_warnings()
         if self.stats.get("untraced_curve"):
             out.append("F has a curve of singular points in the box that could not be traced; "
                        "near it the mesh is not right")
-        roots = self.stats.get("unfollowed_creases", [])
-        if roots:
-            name, p = roots[0]
-            out.append(f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
-                       f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})): "
-                       "the mesh does not follow them and is not right near them")
+        out += self.crease_warnings()
         for factor, k in self.stats.get("repeated_factors", []):
             out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
                        "(a repeated factor does not change sign, so its zeros are all singular)")
