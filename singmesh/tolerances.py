@@ -112,6 +112,14 @@ CREASE_MAX_RAISE = 3
 #: not close there.
 CREASE_GAP_DETOUR = 3.0
 
+#: ... and along a way that passes no corner (no vertex where the creases
+#: turn by more than CREASE_LOOP_TURN degrees, or meet), more than this
+#: times their distance: the two sides of a small closed crease (pi/2
+#: across a circle) are apart, the points along a gently bent crease
+#: (about 1) are not.
+CREASE_LOOP_DETOUR = 1.4
+CREASE_LOOP_TURN = 30.0
+
 #: Largest polygon triangulated by exhaustive search over all its
 #: triangulations (Catalan(n-2) of them); larger ones get a centre vertex.
 MAX_TEMPLATE_POLYGON = 8

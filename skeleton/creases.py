@@ -406,9 +406,41 @@ def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int) -> float:
     limit = tol.CREASE_GAP_DETOUR * tol.CREASE_MIN_GAP * np.sqrt(3.0)
     way = dijkstra(graph, directed=False, indices=src, limit=limit)[inv.reshape(-1), pairs[:, 1]]
     apart = way > tol.CREASE_GAP_DETOUR * d
+    # A small closed crease (a cone capped by a small disc) bends back on
+    # itself with no corner: across it the way is only pi/2 times the
+    # distance, which the corner rule above cannot tell from a corner.
+    # Along a way that passes no corner, a smaller detour is enough.
+    smooth = _without_corners(graph, p, e, n)
+    bent = dijkstra(smooth, directed=False, indices=src, limit=limit)[inv.reshape(-1), pairs[:, 1]]
+    apart |= np.isfinite(bent) & (bent > tol.CREASE_LOOP_DETOUR * d)
     if not apart.any():
         return float("inf")
     return float(np.abs(p[pairs[apart, 0]] - p[pairs[apart, 1]]).max(axis=1).min())
+
+
+def _without_corners(graph, points: np.ndarray, edges: np.ndarray, n: int):
+    """The crease graph without the edges at its corners.
+
+    A corner is a vertex where the creases do not go straight on: one that
+    is not on exactly two edges, or where its two edges turn by more than
+    ``CREASE_LOOP_TURN`` degrees.
+    """
+    e = edges[edges[:, 0] != edges[:, 1]]
+    degree = np.bincount(e.ravel(), minlength=n)
+    corner = degree != 2
+    two = np.nonzero(~corner)[0]
+    if len(two):
+        # The two neighbours of each vertex of degree two, in edge order.
+        ends = np.concatenate([e, e[:, ::-1]])
+        ends = ends[np.argsort(ends[:, 0], kind="stable")]
+        first = np.searchsorted(ends[:, 0], two)
+        a = points[ends[first, 1]] - points[two]
+        b = points[ends[first + 1, 1]] - points[two]
+        cos = -(a * b).sum(1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
+        corner[two] = cos < np.cos(np.radians(tol.CREASE_LOOP_TURN))
+    g = graph.tocoo()
+    keep = ~(corner[g.row] | corner[g.col])
+    return coo_matrix((g.data[keep], (g.row[keep], g.col[keep])), shape=(n, n)).tocsr()
 
 
 def _attach_fading_ends(systems: list, lines: list, h: float) -> list:

@@ -278,6 +278,32 @@ def test_close_creases_raise_the_fine_level():
     assert m.stats["creases"] == 14
 
 
+def test_small_closed_crease_raises_the_fine_level():
+    # A thin capped cylinder in general position: its rims are circles 8.6
+    # fine cells across, with no corner on them.  Across a circle the way
+    # along the crease is only pi/2 times the distance, so the corner rule
+    # took the two sides for one crease; their tubes merged and the caps
+    # were lost (54 open edges at fine = 256).
+    r, h = 0.0337, 0.8123456789
+    u, v, w = (f"({_lin(N_ROWS[i])}{c:+.10f})" for i, c in enumerate((0.0123456789, -0.0234567891, 0.0345678912)))
+    eq = f"Max({u}**2 + {v}**2 - {r}**2, Abs({w}) - {h})"
+    box = np.array([[-1.0, 1.0]] * 3)
+    m = singmesh.mesh(eq, box=box)
+    assert m.stats["fine"] > 256 and m.stats["crease_gap"] >= 12
+    _check_mesh(m, eq, box, closed=True)
+    pairs = [(f"{u}**2 + {v}**2 - {r}**2", f"{w}{s}{h}") for s in "+-"]
+    V, T = m.vertices, m.faces
+    crease_edges, counts, length = _crease_edges(V, T, pairs, 2.0, m.stats["fine"])
+    samples = crease_points(eq, pairs, box, starts=600)
+    assert len(samples) > 40
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= float(length.max()) ** 2 / (8 * r) * 1.01 + 1e-9 * 2.0, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+
+
+N_ROWS = _rotation(23)
+
+
 _U, _V, _W = (f"({_lin(R[i])}{c:+.10f})" for i, c in enumerate((0.0123456789, -0.0234567891, 0.0345678912)))
 #: The point u = v = w = 0 (where the kinks fade out).
 _FADE = np.linalg.solve(R, -np.array([0.0123456789, -0.0234567891, 0.0345678912]))
