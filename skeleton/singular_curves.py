@@ -991,7 +991,10 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     (the tacnode's square law gives ``CURVE_TANGENT_RADIUS``, an A4 edge
     more).  Measured, not read off the type: the coefficients set the
     scale.  Pieces that need no more than the tacnode's tube keep the
-    tube they had (a cuspidal edge: the usual one).
+    tube they had (a cuspidal edge: the usual one), except where their own
+    vertices need more: a cusp whose coefficient goes to 0 along the curve
+    (x^2 = y^2 z^3 near y = 0) has half-sheets within a cell of each other
+    far out there, whatever the piece's median.
     """
     if len(curves.edges) == 0:
         return curves
@@ -1007,6 +1010,11 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
         if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
             v_wide[c.vertices] = True
             need[c.vertices] = max(r, tol.CURVE_TANGENT_RADIUS) if tacnode else r
+        elif c.sheets >= 1:
+            # Only where this stretch needs it: the rest keeps the usual tube.
+            far = reach[c.vertices] > tol.CURVE_TANGENT_RADIUS
+            v_wide[c.vertices[far]] = True
+            need[c.vertices[far]] = reach[c.vertices[far]]
     wide = v_wide[curves.edges].all(axis=1)
     radius = float(np.max(need[curves.edges[wide]], initial=0.0))
     curves.wide = wide

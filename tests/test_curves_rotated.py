@@ -112,6 +112,18 @@ def test_two_cylinders_sheets_near_a_tangential_crossing_stay_apart():
     check_curve_mesh(float_rotated("(x^2 + y^2 - 1)(x^2 + z^2 - 1)", 11), ((-1.5, 1.5),) * 3, 1, coarse=16)
 
 
+def test_cuspidal_edge_with_degenerating_cusp_has_no_bubbles():
+    # x^2 = y^2 z^3: along the y-axis a cuspidal edge x^2 = c z^3 whose
+    # coefficient c = y^2 goes to 0 at the crossing of curves (the origin).
+    # Where c is small the two half-sheets stay within a cell of each other
+    # 20 cells out: the usual tube ended where they were not yet apart, and
+    # each stretch of the thin wedge outside it closed on a strip to the
+    # curve (closed bubbles of 8 to 24 triangles, 2 pieces; x^2 = y^3 z^3
+    # had 34).  The piece's median measure (6 cells) hid it: the tube is
+    # wide wherever the half-sheets need it.
+    check_curve_mesh(float_rotated("x^2 - y^2 z^3", 5), BOX1, 1)
+
+
 TUELLE = "y z (x^2 + y - z)"
 
 
