@@ -246,6 +246,10 @@ class Mesh:
         for factor, k in self.stats.get("repeated_factors", []):
             out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
                        "(a repeated factor does not change sign, so its zeros are all singular)")
+        denominator = getattr(self.surface, "denominator", "")
+        if denominator:
+            out.append(f"F is a fraction N / D with D = {denominator}: the mesh is of N = 0, the closure of "
+                       "F = 0 (where D = 0 on it, F itself is undefined)")
         bad = self.curve_edges_short_of_sheets()
         if bad:
             out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "

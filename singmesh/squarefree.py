@@ -40,4 +40,5 @@ def squarefree(surface: Surface) -> tuple[Surface, list[tuple[str, int]]]:
     reduced = PolynomialSurface._from_expr(sympy.expand(part), f"squarefree part of {surface.text}", {},
                                            surface.rounding)
     return PolynomialSurface(text=surface.text, expr=reduced.expr, coeffs=reduced.coeffs, degree=reduced.degree,
-                             params=surface.params, rounding=surface.rounding), repeated
+                             params=surface.params, rounding=surface.rounding,
+                             denominator=surface.denominator), repeated

@@ -23,7 +23,7 @@ from __future__ import annotations
 import abc
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping
 
 import numpy as np
@@ -205,6 +205,17 @@ class Surface(abc.ABC):
             )
         if _is_polynomial(expr):
             return PolynomialSurface._from_expr(expr, text, values, rounding)
+        fraction = _polynomial_fraction(expr)
+        if fraction is not None:
+            # F = N / D: F = 0 is N = 0 off D = 0, and its closure is N = 0
+            # (N, D coprime meet in a curve at most): the polynomial path
+            # meshes it exactly, through the lines where it runs into a pole.
+            try:
+                surface = PolynomialSurface._from_expr(fraction[0], text, values, rounding)
+            except SurfaceError:
+                pass  # N over the degree limit: the interval path, as any F
+            else:
+                return replace(surface, denominator=str(fraction[1]))
         # sqrt, abs, Min/Max, exp, trig ...: interval bounds and Taylor jets
         # of the expression tree instead of Bernstein tensors.
         from .elementary import ElementarySurface
@@ -393,6 +404,8 @@ class PolynomialSurface(Surface):
     degree: int
     params: Mapping[str, float] = field(default_factory=dict)
     rounding: float = float(np.finfo(float).eps)
+    #: For a rational F = N / D: D (the surface is N = 0), else "".
+    denominator: str = ""
 
     is_polynomial = True
 
@@ -598,6 +611,19 @@ def check_variables(expr: sympy.Expr) -> None:
             "keyword arguments or as definitions such as '; %s = 1;'"
             % ("s" if len(unknown) > 1 else "", ", ".join(unknown), unknown[0])
         )
+
+
+def _polynomial_fraction(expr: sympy.Expr):
+    """(N, D), coprime polynomials with F = N / D, for a rational F that is not a polynomial; else None."""
+    if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
+        return None
+    try:
+        num, den = sympy.fraction(sympy.cancel(sympy.together(expr)))
+    except (TypeError, ValueError, sympy.PolynomialError):  # pragma: no cover - sympy cannot combine it
+        return None
+    if not den.free_symbols:
+        return None
+    return num, den
 
 
 def _is_polynomial(expr: sympy.Expr) -> bool:

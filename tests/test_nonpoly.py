@@ -365,27 +365,41 @@ def test_inverse_functions_in_general_position(which):
     assert mc.degenerate_triangles(m.vertices, m.faces) == 0
 
 
-def test_surface_ends_on_a_pole_line():
-    # A surface that runs into a pole of F = N / D ends on the pole line
-    # N = D = 0 (F = 0 / 0 there): x / y = 0 is the plane x = 0 whole,
-    # meshed up to the pole y = 0 from both sides; a tilted plane and pole
-    # in general position the same.  No open edge off the box, the
-    # vertices on the surface or (to rounding) on the pole line.
+def test_rational_surface_is_meshed_through_its_pole_lines():
+    # F = N / D: F = 0 is N = 0 off the pole D = 0, and its closure is N = 0
+    # (N and D coprime).  x / y = 0 is the plane x = 0 whole, across the
+    # pole y = 0; a tilted plane and pole in general position the same;
+    # 1/x + 1/y = 3 runs through the crossing of its two pole planes (the
+    # z-axis: 512 open edges when the mesh ended on pole lines), two strips
+    # of the hyperbolic cylinder x + y = 3 x y; a sphere touching its pole
+    # plane at a point is closed.  No open edge off the box, vertices on
+    # N = 0, triangles across the pole, the note names D.
     box = np.array(B1)
-    cases = [("x / y", lambda x, y, z: x, lambda x, y, z: y),
+    cases = [("x / y", lambda x, y, z: x, lambda x, y, z: y, 1, 1),
              ("(x - 0.3 y + 0.0123456) / (y - 0.0234567 + 0.1 z) - 0.25",
               lambda x, y, z: x - 0.3 * y + 0.0123456 - 0.25 * (y - 0.0234567 + 0.1 * z),
-              lambda x, y, z: y - 0.0234567 + 0.1 * z)]
-    for text, num, den in cases:
+              lambda x, y, z: y - 0.0234567 + 0.1 * z, 1, 1),
+             ("1/(x - 0.1234567) + 1/(y + 0.0456789) - 3",
+              lambda x, y, z: (y + 0.0456789) + (x - 0.1234567) - 3 * (x - 0.1234567) * (y + 0.0456789),
+              lambda x, y, z: (x - 0.1234567) * (y + 0.0456789), 2, 2),
+             ("(x^2 + y^2 + z^2 - 0.64) / (z - 0.8)",
+              lambda x, y, z: x * x + y * y + z * z - 0.64, lambda x, y, z: z - 0.8, 2, 1)]
+    for text, num, den, chi, pieces in cases:
         m = singmesh.mesh(text, B1, coarse=16, fine=64)
         V = m.vertices
         assert mc.boundary_edges_off_box(V, m.faces, box) == [] and mc.non_manifold_edges(m.faces) == []
-        assert mc.euler(V, m.faces) == 1 and mc.components(m.faces) == 1
+        assert mc.euler(V, m.faces) == chi and mc.components(m.faces) == pieces
         n, d = num(*V.T), den(*V.T)
-        assert np.abs(n).max() <= 1e-12                    # on the plane N = 0
-        on_pole = np.abs(d) <= 1e-12
-        assert on_pole.sum() >= 20                         # vertices along the pole line
+        g = np.linalg.norm(_grad(num, V, 1e-7), axis=1)
+        assert (np.abs(n) / g).max() <= 1e-12                # on N = 0
+        # the mesh goes across a pole plane: triangles with vertices on both
+        # sides of D = 0, or on it (1/x + 1/y: D = x y keeps its sign across
+        # the crossing line, where each strip being one piece says it)
+        sides = np.sign(np.where(np.abs(d) <= 1e-12, 0.0, d))[m.faces]
+        across = ((sides.max(axis=1) > 0) & (sides.min(axis=1) < 0)) | (sides == 0).any(axis=1)
+        assert across.sum() >= (10 if chi == 1 else 0)
         assert np.isfinite(m.normals).all()
+        assert any("N / D" in note for note in m.notes())
         # the plane's piece in the box is covered: its area by the polygon
         v = V[m.faces]
         area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum()

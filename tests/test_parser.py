@@ -85,7 +85,7 @@ def test_errors_name_the_problem(text, words):
 
 @pytest.mark.parametrize("text, f", [
     ("sin(x) + y", lambda x, y, z: np.sin(x) + y),
-    ("x / (1 + y^2)", lambda x, y, z: x / (1 + y * y)),
+    ("x / (1 + sin(y)^2)", lambda x, y, z: x / (1 + np.sin(y) ** 2)),
     ("sqrt(x^2 + y^2) - z", lambda x, y, z: np.sqrt(x * x + y * y) - z),
 ])
 def test_non_polynomials_are_read_as_functions(text, f):
@@ -95,6 +95,19 @@ def test_non_polynomials_are_read_as_functions(text, f):
     assert not s.is_polynomial
     p = np.random.default_rng(1).uniform(-1, 1, (20, 3))
     assert np.allclose(s(p), f(*p.T), rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("text", ["x / (1 + y^2)", "1/x + 1/y - 3", "(x^2 - y^2) / (x - y) + 1/z", "2.5/(x - 0.1) - z"])
+def test_rational_functions_are_read_as_numerator_over_denominator(text):
+    # F = N / D has the zero set N = 0 (off D = 0): the polynomial N, with D kept
+    # for the report; checked by sympy: N / D - F simplifies to 0, D not constant.
+    import sympy
+
+    s = Surface.parse(text)
+    assert s.is_polynomial and s.denominator
+    f = sympy.sympify(text.replace("^", "**"))
+    assert sympy.simplify(sympy.sympify(str(s.expr)) / sympy.sympify(s.denominator) - f) == 0
+    assert sympy.sympify(s.denominator).free_symbols
 
 
 def test_not_text():
