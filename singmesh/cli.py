@@ -47,6 +47,9 @@ def _mesh_command(argv: list[str]) -> int:
                    help="boxes per axis of the uniform subdivision (power of two; default 32)")
     p.add_argument("--fine", type=int, default=256,
                    help="boxes per axis at the deepest refinement (power of two; default 256)")
+    p.add_argument("--no-curvature", action="store_true",
+                   help="do not write the per-vertex curvatures (gaussian_curvature, mean_curvature, k1, k2), "
+                        "which go by default as point data into .ply .vtk .vtu files")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     args = p.parse_args(argv)
@@ -69,7 +72,7 @@ def _mesh_command(argv: list[str]) -> int:
     print(m.report_text())
     if args.output:
         try:
-            path = m.write(args.output)
+            path = m.write(args.output, curvature=not args.no_curvature)
         except (ValueError, OSError) as exc:
             print(f"singmesh: error: cannot write {args.output}: {exc}", file=sys.stderr)
             return 2

@@ -489,3 +489,9 @@ CREASE_CORNER = 1.5
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
+
+#: Curvature (singmesh.curvature): grad F is zero at a point, and the
+#: curvature undefined (NaN), when |grad F| is below this fraction of the
+#: size of the terms summed for its components: ZERO_ULPS ulps, the
+#: rounding error of that sum (a singular vertex's computed gradient).
+CURVATURE_GRADIENT_ZERO = ZERO_ULPS * 2.0 ** -52
