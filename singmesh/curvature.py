@@ -10,8 +10,8 @@ H the Hessian of F at a point of F = 0:
 * principal curvatures ``k1, k2 = M +- sqrt(max(M^2 - K, 0))``, k1 >= k2.
 
 Sign convention: the unit normal is ``n = grad F / |grad F|`` (the mesh's
-normals) and a curvature is positive where the surface bends *away* from
-n, ``M = -div(n) / 2``.  The sphere ``x^2 + y^2 + z^2 - r^2`` (n outward)
+normals) and a curvature is positive where the surface bends *towards*
+n (its centre of curvature on n's side), ``M = -div(n) / 2``.  The sphere ``x^2 + y^2 + z^2 - r^2`` (n outward)
 has ``M = k1 = k2 = -1/r`` and ``K = 1/r^2``; written as ``r^2 - x^2 - y^2
 - z^2`` (n inward) it has ``M = +1/r``.  K does not depend on the sign of F.
 
@@ -38,7 +38,7 @@ class Curvatures:
     gaussian : (n,) float64
         K = k1 k2.
     mean : (n,) float64
-        (k1 + k2) / 2, positive where the surface bends away from grad F.
+        (k1 + k2) / 2, positive where the surface bends towards grad F.
     principal : (n, 2) float64
         k1 >= k2.
     directions : (n, 2, 3) float64

@@ -82,8 +82,8 @@ class Mesh:
     gaussian_curvature, mean_curvature : (n,) float64
         Per vertex, from F's exact derivatives (:mod:`singmesh.curvature`:
         Goldman's formulas; the mean curvature is positive where the
-        surface bends away from ``normals``, so a sphere F = |p|^2 - r^2
-        has -1/r).  NaN at singular vertices, on singular curves and
+        surface bends towards ``normals``, so a sphere F = |p|^2 - r^2,
+        whose normals point out, has -1/r).  NaN at singular vertices, on singular curves and
         creases, and wherever grad F vanishes.  Computed on first access.
     principal_curvatures : (n, 2) float64
         k1 >= k2 per vertex (NaN as above).
