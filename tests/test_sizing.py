@@ -100,22 +100,36 @@ def test_cayley_cubic_singular_points_keep_their_fans():
 
 
 def test_rotated_ellipsoid_15_digits():
+    """Float-rotated, shifted ellipsoid: the chord tolerance is met, and min_edge bounds the refinement."""
     rng = np.random.default_rng(5)
     q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     t = np.array([0.0713, -0.0391, 0.0527])
+    axes = np.array([0.8, 0.4, 0.12])
     u = [sum(q[i, j] * ((X, Y, Z)[i] - t[i]) for i in range(3)) for j in range(3)]
-    e = sp.expand(u[0] ** 2 + (u[1] / 0.5) ** 2 + (u[2] / 0.15) ** 2 - 0.64)
+    e = sp.expand(sum((u[j] / axes[j]) ** 2 for j in range(3)) - 1)
     text = str(e.xreplace({f: sp.Float(f"{float(f):.15g}") for f in e.atoms(sp.Float)}))
-    m = _mesh(text, ((-1, 1),) * 3, size="curvature", chord=1e-3, min_edge=1 / 128)
+
+    def deviation(m):
+        """Largest distance of centroids and edge midpoints to the unrotated ellipsoid (Newton), / box side."""
+        tri = m.vertices[m.faces]
+        pts = np.vstack([tri.mean(1), (tri[:, 0] + tri[:, 1]) / 2, (tri[:, 1] + tri[:, 2]) / 2,
+                         (tri[:, 2] + tri[:, 0]) / 2])
+        p = (pts - t) @ q
+        x, s2 = p.copy(), axes**2
+        for _ in range(40):
+            g = 2 * x / s2
+            x -= ((x**2 / s2).sum(1) - 1)[:, None] / (g**2).sum(1)[:, None] * g
+        return np.linalg.norm(x - p, axis=1).max() / 2.0
+
+    box = ((-1, 1),) * 3
+    m = _mesh(text, box, size="curvature", chord=1e-3)
     _valid(m, 2)
-    # Along the thinnest axis (c = 0.15 * 0.8) the rim, where |u2| is small and u0 large, is the most curved.
-    w = (m.vertices - t) @ q
-    e, length = _edge_lengths(m)
-    mid = w[e].mean(axis=1)
-    tip = np.abs(mid[:, 0]) > 0.75  # ends of the longest axis: k up to 0.8 / 0.12^2
-    flat = (np.abs(mid[:, 2]) > 0.1) & (np.abs(mid[:, 0]) < 0.3)  # the broad faces: k about 0.12 / 0.4^2
-    assert tip.sum() > 10 and flat.sum() > 10
-    assert length[tip].mean() < 0.5 * length[flat].mean()
+    assert deviation(m) <= 1e-3
+    # The uniform mesh from the same largest boxes (max_edge 1/8) is far off.
+    assert deviation(_mesh(text, box, coarse=8)) > 1e-2
+    # A shortest edge of 1/128 stops the refinement at the rim: fewer triangles, the tolerance not met.
+    capped = _mesh(text, box, size="curvature", chord=1e-3, min_edge=1 / 128)
+    assert len(capped.faces) < len(m.faces) and deviation(capped) > 1e-3
 
 
 @pytest.mark.parametrize("kw, words", [
