@@ -1,11 +1,11 @@
 """Curvature-adaptive sizing (issue #12): triangles against maximal chord error.
 
 For each surface, the uniform mesh at two resolutions (``coarse`` = 32
-and 64 boxes per axis, or finer where the surface needs it), and beside each the coarsest curvature mesh (``size="curvature"``)
-whose maximal deviation is no larger than the uniform mesh's (chord
-tolerances from twice the uniform mesh's deviation down by factors of
-sqrt(2), at most six tries).  The deviation is
-the largest distance to F = 0 (Newton along grad F from the point, 20
+and 64 boxes per axis, or finer where the surface needs it), and beside
+each the coarsest curvature mesh (``size="curvature"``) whose maximal
+deviation is no larger than the uniform mesh's (chord tolerances from
+twice the uniform mesh's deviation down by factors of sqrt(2), at most
+six tries).  The deviation is the largest distance to F = 0 (Newton along grad F from the point, 20
 steps) of the triangles' centroids and edge midpoints, relative to the
 box's longest side, over the triangles farther than 5% of the box from
 every singular point (the fans in the singular points' stars are the
@@ -68,7 +68,8 @@ def deviation(m: singmesh.Mesh, away: float = 0.05) -> tuple[float, float]:
     far = np.ones(len(pts), bool)
     if len(m.singular_points):
         owner = np.tile(np.arange(len(f)), 4)
-        near = (np.linalg.norm(tri[:, :, None, :] - m.singular_points[None, None], axis=3) < away * side).any(axis=(1, 2))
+        gap = np.linalg.norm(tri[:, :, None, :] - m.singular_points[None, None], axis=3)
+        near = (gap < away * side).any(axis=(1, 2))
         far = ~near[owner]
     return float(d[far].max()), float(d.max())
 
@@ -112,7 +113,8 @@ def main(argv=None) -> int:
                 chord /= 2 ** 0.5
             levels = ",".join(f"{lvl}:{n}" for lvl, n in enumerate(mc.stats["levels"]) if n)
             print(f"{name:<20s} {res:>8d} {len(mu.faces):>9d} {du:>9.2e} {tu:>6.1f} | "
-                  f"{chord:>8.1e} {len(mc.faces):>9d} {dc:>9.2e} {tc:>6.1f} {len(mc.faces) / len(mu.faces):>6.2f}  {levels}",
+                  f"{chord:>8.1e} {len(mc.faces):>9d} {dc:>9.2e} {tc:>6.1f} "
+                  f"{len(mc.faces) / len(mu.faces):>6.2f}  {levels}",
                   flush=True)
             if du_all != du or dc_all != dc:
                 print(f"{'':<20s} {'(all)':>8s} {'':>9s} {du_all:>9.2e} {'':>6s} | {'':>8s} {'':>9s} {dc_all:>9.2e}")
