@@ -4,8 +4,9 @@ For each surface, the uniform mesh at two resolutions (``coarse`` = 32
 and 64 boxes per axis, or finer where the surface needs it), and beside
 each the coarsest curvature mesh (``size="curvature"``) whose maximal
 deviation is no larger than the uniform mesh's (chord tolerances from
-twice the uniform mesh's deviation down by factors of sqrt(2), at most
-six tries).  The deviation is the largest distance to F = 0 (Newton along grad F from the point, 20
+twice the uniform mesh's deviation down by factors of 2^(1/4), at most
+ten tries: the leaves halve level by level, so the deviation moves in
+steps).  The deviation is the largest distance to F = 0 (Newton along grad F from the point, 20
 steps) of the triangles' centroids and edge midpoints, relative to the
 box's longest side, over the triangles farther than 5% of the box from
 every singular point (the fans in the singular points' stars are the
@@ -106,11 +107,11 @@ def main(argv=None) -> int:
             # The coarsest curvature mesh of a ladder of chord tolerances
             # whose deviation is no larger than the uniform mesh's.
             chord = 2 * du
-            for _ in range(6):
+            for _ in range(10):
                 mc, tc, (dc, dc_all) = run(text, half, size="curvature", chord=chord)
                 if dc <= du:
                     break
-                chord /= 2 ** 0.5
+                chord /= 2 ** 0.25
             levels = ",".join(f"{lvl}:{n}" for lvl, n in enumerate(mc.stats["levels"]) if n)
             print(f"{name:<20s} {res:>8d} {len(mu.faces):>9d} {du:>9.2e} {tu:>6.1f} | "
                   f"{chord:>8.1e} {len(mc.faces):>9d} {dc:>9.2e} {tc:>6.1f} "
@@ -119,7 +120,7 @@ def main(argv=None) -> int:
             if du_all != du or dc_all != dc:
                 print(f"{'':<20s} {'(all)':>8s} {'':>9s} {du_all:>9.2e} {'':>6s} | {'':>8s} {'':>9s} {dc_all:>9.2e}")
     print("ratio: curvature triangles / uniform triangles, the curvature mesh's deviation no larger "
-          "(unless six tries did not get there: then its deviation column is larger)")
+          "(unless ten tries did not get there: then its deviation column is larger)")
     return 0
 
 

@@ -364,14 +364,17 @@ class Mesh:
     def to_meshio(self):
         """The mesh as a ``meshio.Mesh``: triangles, and line cells for the one-dimensional part.
 
-        Vertex normals are point data (zero at the points of an isolated line).
+        Vertex normals are point data (zero at the points of an isolated
+        line), and the curvatures (:meth:`curvature_data`; NaN there).
         """
         import meshio
 
         points, lines = self.curve_lines()
         cells = [("triangle", self.faces)] + ([("line", lines)] if len(lines) else [])
-        normals = np.vstack([self.normals, np.zeros((len(points) - len(self.vertices), 3))])
-        return meshio.Mesh(points, cells, point_data={"Normals": normals})
+        extra = len(points) - len(self.vertices)
+        data = {"Normals": np.vstack([self.normals, np.zeros((extra, 3))])}
+        data.update({k: np.concatenate([v, np.full(extra, np.nan)]) for k, v in self.curvature_data().items()})
+        return meshio.Mesh(points, cells, point_data=data)
 
     def write(self, path, file_format: str | None = None, curvature: bool = True) -> Path:
         """Write through meshio; the format comes from the suffix.

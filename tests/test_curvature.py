@@ -186,3 +186,12 @@ def test_cli_writes_curvature_by_default(tmp_path, capsys):
     assert main(["mesh", "x^2 + y^2 + z^2 - 1", "-o", str(out2), "--coarse", "8", "--fine", "8",
                  "--no-curvature"]) == 0
     assert "gaussian_curvature" not in meshio.read(out2).point_data
+
+
+def test_to_meshio_has_curvature():
+    m = _mesh("x^2 - y^2 z", ((-1, 1),) * 3, fine=32)
+    mm = m.to_meshio()
+    n = len(m.vertices)
+    assert len(mm.points) > n  # the handle's extra points
+    assert np.array_equal(mm.point_data["k2"][:n], m.principal_curvatures[:, 1], equal_nan=True)
+    assert np.isnan(mm.point_data["mean_curvature"][n:]).all()
