@@ -191,7 +191,7 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     return meets, inside
 
 
-def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None):
+def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None, refine=None):
     """Subdivide boxes level by level from ``frontier`` [(level, data, corners), ...].
 
     Returns the leaves (lists of data, corners, levels, simple flags) and
@@ -225,6 +225,10 @@ def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None,
             test = np.nonzero(~forced)[0]
             simple[test] = surface.simple_axis(data[test]) >= 0
             stop = simple | in_star | (level == fine_level)
+            if refine is not None and level < fine_level:
+                # Simple boxes too large for the sizing (the curvature) go on.
+                ask = np.nonzero(stop & ~in_star)[0]
+                stop[ask[refine(level, corner[ask])]] = False
             leaves_d.append(data[stop])
             leaves_c.append(corner[stop])
             leaves_l.append(np.full(int(stop.sum()), level, dtype=np.int64))
@@ -308,7 +312,8 @@ def _concatenate_kept(data: np.ndarray, keep: np.ndarray, more: list) -> np.ndar
 
 
 def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
-              keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None) -> Octree:
+              keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None,
+              refine=None) -> Octree:
     """Subdivide ``box`` for the surface F = 0.
 
     Every box is split down to ``coarse_level``; below it only boxes that
@@ -333,6 +338,11 @@ def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
         never split), boxes meeting one are split to the fine level, so
         that its boundary is tiled by fine faces and nothing is spent on
         its inside.
+    refine : callable, optional
+        ``refine(level, corners) -> (K,) bool``: boxes of ``level`` (lattice
+        corners (K, 3)) that the simplicity test would stop but that are
+        split further (too large for the sizing:
+        :class:`singmesh.boxes.sizing.CurvatureSizing`).
 
     Returns
     -------
@@ -342,7 +352,7 @@ def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
     root = surface.enclose(box)
     frontier = [(0, root, np.zeros((1, 3), dtype=np.int64))]
     leaves_d, leaves_c, leaves_l, leaves_s, internal = _grow(
-        surface, frontier, box, coarse_level, fine_level, keep_splitting, stars)
+        surface, frontier, box, coarse_level, fine_level, keep_splitting, stars, refine)
     cat = lambda parts, empty: np.concatenate(parts) if parts else empty  # noqa: E731
     return Octree(
         box=box,

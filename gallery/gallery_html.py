@@ -343,6 +343,8 @@ def detail_page(rec: dict, prev: dict | None, nxt: dict | None, group: Group | N
         ("box", esc(box)),
         ("parameters", params),
         ("resolution", f'coarse {esc(rec.get("coarse"))}, fine {esc(rec.get("fine"))}'),
+        ("colour", f'by {esc(rec.get("colour"))} curvature (blue negative, white zero, red positive; '
+                   'green where undefined)' if rec.get("colour") else "by side"),
         ("status", esc(rec.get("status")) + (f' \u2014 {esc(rec.get("reason"))}' if rec.get("reason") else "")),
     ]
     found_forms = [s.get("name") or "?" for s in rec.get("singularities") or []]

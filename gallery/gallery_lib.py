@@ -41,6 +41,12 @@ _ADE = re.compile(r"^([ADE])_?(\d+)")
 _TYPE_ONLY = re.compile(r"^[ADE]\d+$")
 
 
+#: The surface colourings of an entry's ``colour`` field: the Mesh array
+#: and the label written in the picture.
+COLOURINGS = {"gaussian": ("gaussian_curvature", "Gaussian curvature K"),
+              "mean": ("mean_curvature", "mean curvature")}
+
+
 class CatalogueError(ValueError):
     """The catalogue file is unreadable or an entry misses a field."""
 
@@ -107,6 +113,7 @@ class Entry:
     coarse: int = 32
     fine: int = 256
     timeout: float | None = None
+    colour: str = ""  # "" (by side), or a per-vertex curvature: a key of COLOURINGS
     defs: str = ""  # the SingSurf .defs file and the index of the definition in it, if from one
     defs_index: int = -1
 
@@ -222,6 +229,9 @@ def load_catalogue(path: str | Path = DEFAULT_CATALOGUE) -> tuple[list[Group], l
             slug, k = f"{base}-{k}", k + 1
         slugs.add(slug)
         euler = raw.get("euler")
+        colour = raw.get("colour", "")
+        if colour and colour not in COLOURINGS:
+            raise CatalogueError(f"{where}: colour must be one of {sorted(COLOURINGS)}, not {colour!r}")
         entries.append(Entry(
             name=name, slug=slug, group=group,
             equation=_need(raw, "equation", str, where),
@@ -236,6 +246,7 @@ def load_catalogue(path: str | Path = DEFAULT_CATALOGUE) -> tuple[list[Group], l
             notes=raw.get("notes", ""),
             coarse=int(raw.get("coarse", 32)), fine=int(raw.get("fine", 256)),
             timeout=float(raw["timeout"]) if "timeout" in raw else None,
+            colour=colour,
         ))
     return groups, entries
 
@@ -470,6 +481,14 @@ def _record_error(record: dict[str, Any], exc: BaseException) -> None:
         record["comparison"]["verdict"] = "error"
 
 
+def _colouring(m, colour: str) -> dict[str, Any]:
+    """``render_png``'s ``values`` and ``value_label`` for an entry's ``colour`` (none if empty)."""
+    if not colour:
+        return {}
+    attribute, label = COLOURINGS[colour]
+    return {"values": getattr(m, attribute), "value_label": label}
+
+
 def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine: int | None,
                    record: dict[str, Any]) -> None:
     """The work of :func:`run_entry`; fills ``record`` as it goes, ``stage`` says how far."""
@@ -508,6 +527,7 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
     record["special_points"] = [{"kind": sp.kind, "point": sp.point.tolist()} for sp in m.special_points]
     render_png(out / f"{entry.slug}.png", m.vertices, m.faces, m.box, normals=m.normals,
                points=points, point_names=[s["name"] for s in sings], size=size, note=note,
-               curves=[c.points for c in m.singular_curves], curve_names=[c.type for c in m.singular_curves])
+               curves=[c.points for c in m.singular_curves], curve_names=[c.type for c in m.singular_curves],
+               **_colouring(m, entry.colour))
     record["files"]["png"] = f"{entry.slug}.png"
     record["render_time"] = time.perf_counter() - t1

@@ -32,6 +32,11 @@ FRONT_COLOUR = np.array([0.96, 0.72, 0.30])
 BACK_COLOUR = np.array([0.30, 0.56, 0.78])
 BACKGROUND = "#fbfbfc"
 
+#: Colour map of a surface coloured by a value per vertex (curvature):
+#: diverging, white at zero.  Green where the value is undefined.
+CURVATURE_MAP = "coolwarm"
+UNDEFINED_COLOUR = np.array([0.45, 0.75, 0.35])
+
 #: Colours of singular-point markers by family of the classification name.
 POINT_COLOURS = {"A": "#d62728", "D": "#9467bd", "E": "#2ca02c"}
 OTHER_POINT_COLOUR = "#222222"
@@ -69,11 +74,13 @@ def face_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | 
     return out
 
 
-def shade(normals: np.ndarray, basis: np.ndarray) -> np.ndarray:
+def shade(normals: np.ndarray, basis: np.ndarray, base: np.ndarray | None = None) -> np.ndarray:
     """RGB per face: two-sided Lambert from a key and a fill light, plus a highlight.
 
     Lights are fixed relative to the camera so that every picture is lit
     the same way.  ``abs`` of the dot products makes both sides lit.
+    ``base`` (m, 3): the faces' own colours (e.g. by curvature) instead
+    of the front and back colours.
     """
     right, up, towards = basis
     key = -0.45 * right + 0.65 * up + 0.62 * towards
@@ -86,10 +93,29 @@ def shade(normals: np.ndarray, basis: np.ndarray) -> np.ndarray:
     half /= np.linalg.norm(half)
     spec = np.abs(normals @ half) ** 40
     facing = normals @ towards >= 0
-    base = np.where(facing[:, None], FRONT_COLOUR, BACK_COLOUR)
+    if base is None:
+        base = np.where(facing[:, None], FRONT_COLOUR, BACK_COLOUR)
     light = 0.20 + 0.62 * n_key + 0.22 * n_fill
     rgb = base * light[:, None] + 0.30 * spec[:, None]
     return np.clip(rgb, 0.0, 1.0)
+
+
+def value_colours(values: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, float]:
+    """RGB per face from a value per vertex, and the value at the ends of the colour scale.
+
+    A diverging map centred on zero (blue negative, white zero, red
+    positive), symmetric, saturating at the 95th percentile of |value|:
+    values near singular points grow without bound and would wash the
+    rest out.  Faces with an undefined (NaN) vertex value are green.
+    """
+    v = np.asarray(values, float)[faces]
+    defined = np.isfinite(v).all(axis=1)
+    face = np.where(defined, np.where(np.isfinite(v), v, 0.0).mean(axis=1), 0.0)
+    scale = float(np.percentile(np.abs(face[defined]), 95)) if defined.any() else 0.0
+    scale = scale if scale > 0 else 1.0
+    rgb = plt.get_cmap(CURVATURE_MAP)(0.5 + 0.5 * np.clip(face / scale, -1.0, 1.0))[:, :3]
+    rgb[~defined] = UNDEFINED_COLOUR
+    return rgb, scale
 
 
 def _box_edges(box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,7 +137,8 @@ def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
                normals: np.ndarray | None = None, points: np.ndarray | None = None,
                point_names: Sequence[str] | None = None, size: int = 640,
                note: str | None = None, curves: Sequence[np.ndarray] | None = None,
-               curve_names: Sequence[str] | None = None) -> Path:
+               curve_names: Sequence[str] | None = None, values: np.ndarray | None = None,
+               value_label: str | None = None) -> Path:
     """Render a shaded picture of a triangle mesh to a PNG file.
 
     Parameters
@@ -139,6 +166,11 @@ def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
         real line is then visible at all).
     curve_names : sequence of str, optional
         Their transversal types (isolated lines are drawn dashed).
+    values : (n,) array, optional
+        A value per vertex (e.g. the Gaussian curvature) colouring the
+        faces (:func:`value_colours`) instead of the two side colours.
+    value_label : str, optional
+        What ``values`` are, written in a corner with the scale's ends.
 
     Returns
     -------
@@ -182,7 +214,13 @@ def render_png(path: str | Path, vertices: np.ndarray, faces: np.ndarray, box,
         screen = tri @ basis[:2].T
         depth = (tri @ basis[2]).mean(axis=1)
         order = np.argsort(depth, kind="stable")  # far first: painter's algorithm
-        colours = shade(face_normals(vertices, faces, normals), basis)[order]
+        base = None
+        if values is not None:
+            base, scale = value_colours(values, faces)
+            ax.text(0.03, 0.97, f"{value_label or 'value'}: blue -{scale:.3g}, white 0, red +{scale:.3g}",
+                    transform=ax.transAxes, ha="left", va="top", fontsize=max(7, size // 60),
+                    color="#374151", zorder=6)
+        colours = shade(face_normals(vertices, faces, normals), basis, base)[order]
         # Edges in the face colour close the hairline cracks that
         # antialiasing leaves between neighbouring triangles.
         ax.add_collection(PolyCollection(screen[order], facecolors=colours, edgecolors=colours,

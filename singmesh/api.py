@@ -14,6 +14,7 @@ from threadpoolctl import threadpool_limits
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links, leaf_sides
 from singmesh.boxes.octree import refine_stars, subdivide
+from singmesh.boxes.sizing import CurvatureSizing
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
@@ -64,7 +65,9 @@ def check_box(box) -> np.ndarray:
     return b
 
 
-def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **params) -> Mesh:
+def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, size: str = "uniform",
+         min_edge: float | None = None, max_edge: float | None = None, chord: float | None = None,
+         **params) -> Mesh:
     """Mesh the real surface F = 0 inside ``box``.
 
     Parameters
@@ -87,6 +90,25 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         ``CREASE_MAX_RAISE`` times (``Mesh.stats["crease_gap"]``: their
         distance in boxes at the level used);
         ``Mesh.stats["fine"]`` is the value used.
+    size : {"uniform", "curvature"}
+        ``"uniform"``: triangles about box / ``coarse`` wherever the surface
+        is simple.  ``"curvature"``: triangles sized by the surface's
+        curvature, edges about ``e = sqrt(8 chord / k)`` long where
+        ``k = max(|k1|, |k2|)`` (an arc of curvature k is off its chord of
+        length e by about k e^2 / 8), clamped to [min_edge, max_edge]:
+        fewer triangles on flat parts, more on curved ones, for about the
+        same maximal deviation from the surface.  ``coarse`` is then not
+        used (``max_edge`` sets the largest boxes); singular points and
+        curves keep their own refinement down to ``fine``.
+    min_edge, max_edge : float, optional
+        With ``size="curvature"``: the shortest and longest edges wanted,
+        as fractions of the box's longest side (edges are about as long as
+        the boxes holding them, which are halved level by level: the
+        sizes used are the powers of two within the limits).  Defaults
+        ``1 / fine`` and ``1 / 8``.
+    chord : float, optional
+        With ``size="curvature"``: the chord tolerance delta, a fraction of
+        the box's longest side (default ``1e-3``).
     **params
         Values of named parameters of the equation.
 
@@ -107,10 +129,45 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     # Non-polynomial F are NaN outside their domain and infinite at poles:
     # the stages handle such values, numpy need not warn of each.
     with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return _mesh(surface, box, coarse, fine, params)
+        return _mesh(surface, box, coarse, fine, params, (size, min_edge, max_edge, chord))
 
 
-def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
+def _sizing_levels(size: str, min_edge, max_edge, chord, fine_level: int) -> tuple[int, int, float] | None:
+    """(coarse level, smallest-edge level, chord) of ``size="curvature"``; None for ``"uniform"``.
+
+    Raises
+    ------
+    SurfaceError
+        An unknown ``size``, limits given without ``size="curvature"``, or
+        limits that are not numbers in (0, 1] in order.
+    """
+    if size == "uniform":
+        given = [n for n, v in (("min_edge", min_edge), ("max_edge", max_edge), ("chord", chord)) if v is not None]
+        if given:
+            raise SurfaceError(f"{', '.join(given)} go(es) with size='curvature', not size='uniform'")
+        return None
+    if size != "curvature":
+        raise SurfaceError(f"size must be 'uniform' or 'curvature', not {size!r}")
+    values = {"min_edge": 1.0 / (1 << fine_level) if min_edge is None else min_edge,
+              "max_edge": tol.SIZING_MAX_EDGE if max_edge is None else max_edge,
+              "chord": tol.SIZING_CHORD if chord is None else chord}
+    for name, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(v) or not 0 < v <= 1:
+            raise SurfaceError(f"{name} is a fraction of the box's longest side in (0, 1], not {v!r}")
+    if values["min_edge"] > values["max_edge"]:
+        raise SurfaceError(f"min_edge ({values['min_edge']:g}) is larger than max_edge ({values['max_edge']:g})")
+    # Boxes halve level by level: no box longer than max_edge, none split
+    # below min_edge (a tiny slack: 1/8 is level 3, not 4 by rounding).
+    coarse_level = max(0, int(np.ceil(np.log2(1.0 / values["max_edge"]) - 1e-9)))
+    min_level = max(coarse_level, int(np.floor(np.log2(1.0 / values["min_edge"]) + 1e-9)))
+    if min_level > fine_level:
+        raise SurfaceError(f"min_edge = {values['min_edge']:g} is below the finest boxes (1/fine = "
+                           f"{1 / (1 << fine_level):g}): raise fine or min_edge")
+    return coarse_level, min_level, float(values["chord"])
+
+
+def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform", None, None, None)) -> Mesh:
     """:func:`mesh` itself."""
     t0 = time.perf_counter()
     surf = Surface.parse(surface, **params)
@@ -121,6 +178,9 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     fine_level = _level(fine, "fine")
     if fine_level < coarse_level:
         raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
+    levels = _sizing_levels(*sizing, fine_level)
+    if levels is not None:
+        coarse_level = levels[0]
 
     cell = (b[:, 1] - b[:, 0]) / (1 << fine_level)
     t_curves = time.perf_counter()
@@ -172,7 +232,11 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
     keep = np.concatenate([cubes, tube_regions(b, fine_level, curves)]) if len(curves.points) else cubes
-    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep)
+    refine = None
+    if levels is not None:
+        side = float((b[:, 1] - b[:, 0]).max())
+        refine = CurvatureSizing(surf, b, fine_level, chord=levels[2] * side, min_level=levels[1])
+    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine)
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
@@ -242,6 +306,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         "unfollowed_creases": unfollowed,
         "overlapping_stars": len(clashes),
         "fine": 1 << fine_level,
+        "size": sizing[0],
         # Distance (fine cells) of the two closest creases, where closer
         # than CREASE_MIN_GAP (then ``fine`` was raised for them), else None.
         "crease_gap": gap if np.isfinite(gap) else None,

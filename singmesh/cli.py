@@ -1,7 +1,9 @@
 """The ``singmesh`` command line.
 
-``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N] [a=1 ...]``
-meshes, writes and prints the report (``--defs FILE --name NAME`` instead of
+``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N]
+[--size curvature [--chord D] [--min-edge E] [--max-edge E]] [--no-curvature] [a=1 ...]``
+meshes, writes (with the per-vertex curvatures as point data in PLY, VTK
+and VTU files, unless ``--no-curvature``) and prints the report (``--defs FILE --name NAME`` instead of
 the equation meshes a definition of a SingSurf file on its own box);
 ``singmesh defs FILE`` lists such a file; ``singmesh classify "EQUATION" --at X Y Z``
 names a singular point; ``singmesh gallery ...`` builds the gallery.  Bad
@@ -47,6 +49,18 @@ def _mesh_command(argv: list[str]) -> int:
                    help="boxes per axis of the uniform subdivision (power of two; default 32)")
     p.add_argument("--fine", type=int, default=256,
                    help="boxes per axis at the deepest refinement (power of two; default 256)")
+    p.add_argument("--size", choices=("uniform", "curvature"), default="uniform",
+                   help="triangle sizes: uniform (about box/coarse; the default) or by the curvature "
+                        "(edges about sqrt(8 chord / max|k|) within --min-edge .. --max-edge)")
+    p.add_argument("--min-edge", type=float, help="with --size curvature: shortest edge, fraction of the box "
+                   "(default 1/fine)")
+    p.add_argument("--max-edge", type=float, help="with --size curvature: longest edge, fraction of the box "
+                   "(default 1/8)")
+    p.add_argument("--chord", type=float, help="with --size curvature: chord tolerance, fraction of the box "
+                   "(default 0.001)")
+    p.add_argument("--no-curvature", action="store_true",
+                   help="do not write the per-vertex curvatures (gaussian_curvature, mean_curvature, k1, k2), "
+                        "which go by default as point data into .ply .vtk .vtu files")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     args = p.parse_args(argv)
@@ -65,11 +79,12 @@ def _mesh_command(argv: list[str]) -> int:
         surface = args.args[0]
         params = _params(args.args[1:])
         box = box or DEFAULT_BOX
-    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, **({} if args.defs else params))
+    sizing = {"size": args.size, "min_edge": args.min_edge, "max_edge": args.max_edge, "chord": args.chord}
+    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, **sizing, **({} if args.defs else params))
     print(m.report_text())
     if args.output:
         try:
-            path = m.write(args.output)
+            path = m.write(args.output, curvature=not args.no_curvature)
         except (ValueError, OSError) as exc:
             print(f"singmesh: error: cannot write {args.output}: {exc}", file=sys.stderr)
             return 2

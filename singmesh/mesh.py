@@ -18,6 +18,12 @@ FORMATS = {
 }
 
 
+#: Formats whose files take the curvatures as scalar point data.
+CURVATURE_FORMATS = ("ply", "vtk", "vtu", "xdmf", "gmsh")
+
+#: The names of the curvature arrays in files.
+CURVATURE_NAMES = ("gaussian_curvature", "mean_curvature", "k1", "k2")
+
 #: Formats whose files hold line cells beside the triangles.
 LINE_FORMATS = ("vtk", "vtu", "xdmf", "gmsh")
 
@@ -73,6 +79,16 @@ class Mesh:
         All curves as one graph: its points, its edges (pairs of points)
         and the mesh vertex at each point (-1 where no triangle has it:
         an isolated real line).
+    gaussian_curvature, mean_curvature : (n,) float64
+        Per vertex, from F's exact derivatives (:mod:`singmesh.curvature`:
+        Goldman's formulas; the mean curvature is positive where the
+        surface bends towards ``normals``, so a sphere F = |p|^2 - r^2,
+        whose normals point out, has -1/r).  NaN at singular vertices, on singular curves and
+        creases, and wherever grad F vanishes.  Computed on first access.
+    principal_curvatures : (n, 2) float64
+        k1 >= k2 per vertex (NaN as above).
+    principal_directions : (n, 2, 3) float64
+        Unit tangent directions of k1 and k2 per vertex.
     """
 
     vertices: np.ndarray
@@ -115,6 +131,45 @@ class Mesh:
                 else (np.zeros((0, 3)), np.zeros((0, 2), np.int64))
             self.__dict__["_skeleton_cache"] = cache
         return cache
+
+    @property
+    def gaussian_curvature(self) -> np.ndarray:
+        return self._curvatures().gaussian
+
+    @property
+    def mean_curvature(self) -> np.ndarray:
+        return self._curvatures().mean
+
+    @property
+    def principal_curvatures(self) -> np.ndarray:
+        return self._curvatures().principal
+
+    @property
+    def principal_directions(self) -> np.ndarray:
+        return self._curvatures().directions
+
+    def _curvatures(self):
+        """The vertices' curvatures, computed once (NaN where F is not smooth)."""
+        cache = self.__dict__.get("_curvature_cache")
+        if cache is None:
+            from .curvature import curvatures
+
+            cache = curvatures(self.surface, self.vertices)
+            # Singular points and the vertices of singular curves and
+            # creases: F's gradient vanishes or jumps there.
+            undefined = [s.vertex for s in self.singularities if s.vertex is not None]
+            undefined += [int(v) for v in self.curve_graph[2] if v >= 0]
+            for a in (cache.gaussian, cache.mean, cache.principal, cache.directions):
+                a[undefined] = np.nan
+            self.__dict__["_curvature_cache"] = cache
+        return cache
+
+    def curvature_data(self) -> dict[str, np.ndarray]:
+        """The per-vertex curvatures as named scalar arrays (file point data)."""
+        k = self.principal_curvatures
+        arrays = (self.gaussian_curvature, self.mean_curvature, np.ascontiguousarray(k[:, 0]),
+                  np.ascontiguousarray(k[:, 1]))
+        return dict(zip(CURVATURE_NAMES, arrays))
 
     @property
     def singular_points(self) -> np.ndarray:
@@ -313,17 +368,26 @@ class Mesh:
     def to_meshio(self):
         """The mesh as a ``meshio.Mesh``: triangles, and line cells for the one-dimensional part.
 
-        Vertex normals are point data (zero at the points of an isolated line).
+        Vertex normals are point data (zero at the points of an isolated
+        line), and the curvatures (:meth:`curvature_data`; NaN there).
         """
         import meshio
 
         points, lines = self.curve_lines()
         cells = [("triangle", self.faces)] + ([("line", lines)] if len(lines) else [])
-        normals = np.vstack([self.normals, np.zeros((len(points) - len(self.vertices), 3))])
-        return meshio.Mesh(points, cells, point_data={"Normals": normals})
+        extra = len(points) - len(self.vertices)
+        data = {"Normals": np.vstack([self.normals, np.zeros((extra, 3))])}
+        data.update({k: np.concatenate([v, np.full(extra, np.nan)]) for k, v in self.curvature_data().items()})
+        return meshio.Mesh(points, cells, point_data=data)
 
-    def write(self, path, file_format: str | None = None) -> Path:
+    def write(self, path, file_format: str | None = None, curvature: bool = True) -> Path:
         """Write through meshio; the format comes from the suffix.
+
+        Formats with per-vertex arrays get the normals and, with
+        ``curvature`` (the default), the curvatures as point data
+        (``CURVATURE_FORMATS``: ``gaussian_curvature``, ``mean_curvature``,
+        ``k1``, ``k2``; NaN where undefined and at the extra points of
+        line cells).  OBJ, STL and OFF files hold neither.
 
         Raises
         ------
@@ -344,11 +408,15 @@ class Mesh:
             point_data = {k: np.ascontiguousarray(self.normals[:, i]) for i, k in enumerate(("nx", "ny", "nz"))}
         else:
             point_data = {"Normals": self.normals}
+        if curvature and fmt in CURVATURE_FORMATS:
+            point_data.update(self.curvature_data())
         points, lines = self.curve_lines()
         if fmt in LINE_FORMATS and len(lines):
             # Line cells in the same file: the one-dimensional part.
             extra = len(points) - len(self.vertices)
-            point_data = {k: np.concatenate([v, np.zeros((extra,) + v.shape[1:])]) for k, v in point_data.items()}
+            # Curvature is not defined on the curves' extra points: NaN there.
+            point_data = {k: np.concatenate([v, np.full((extra,) + v.shape[1:], np.nan if k in CURVATURE_NAMES
+                                                        else 0.0)]) for k, v in point_data.items()}
             m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data)
         else:
             m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)

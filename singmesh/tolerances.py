@@ -497,3 +497,42 @@ CREASE_CORNER = 1.5
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
+
+#: Curvature (singmesh.curvature): grad F is zero at a point, and the
+#: curvature undefined (NaN), when |grad F| is below this fraction of the
+#: size of the terms summed for its components: ZERO_ULPS ulps, the
+#: rounding error of that sum (a singular vertex's computed gradient).
+CURVATURE_GRADIENT_ZERO = ZERO_ULPS * 2.0 ** -52
+
+#: Curvature sizing (singmesh.boxes.sizing): Newton steps from a box's
+#: centre and corners onto F = 0, to sample the curvature in the box
+#: (started within a box of the surface, a few steps converge; a start
+#: that does not is no sample).
+SIZING_NEWTON = 6
+
+#: A sample counts for its box when it lies within the box widened by this
+#: fraction of its side (the surface near the box's faces bends the same).
+SIZING_BOX_SLACK = 0.1
+
+#: A Newton end point is on the surface when |F| is below this fraction of
+#: the size of F's terms there (far above rounding, far below a stalled
+#: start's residual).
+SIZING_RESIDUAL = 1e-8
+
+#: Defaults of mesh(size="curvature"), fractions of the box's longest side:
+#: the longest edge (8 boxes per axis: the coarsest lattice on which the
+#: simplicity test still settles typical surfaces quickly) and the chord
+#: tolerance (a tenth of a percent: the deviation of the uniform mesh at
+#: coarse = 32 on a unit sphere in a box of side 3 is of that order).
+SIZING_MAX_EDGE = 1 / 8
+SIZING_CHORD = 1e-3
+
+#: The longest edge of the triangles in a leaf box, in units of its side,
+#: for the curvature sizing: measured so that the maximal deviation of the
+#: mesh is about the chord tolerance (the unit sphere in [-1.5, 1.5]^3 at
+#: 32 boxes per axis deviates 2.79 times k side^2 / 8 from the surface: the
+#: edges that count are about sqrt(2.79) = 1.67 sides long, face
+#: diagonals).  A little less, so that a chord tolerance equal to a
+#: uniform mesh's deviation does not ask for the next level by rounding
+#: (the deviation can then exceed the tolerance by up to (1.67/1.6)^2 = 9%).
+SIZING_EDGE_PER_SIDE = 1.6

@@ -477,3 +477,28 @@ def _ply_vertices(path):
     import meshio
 
     return meshio.read(path).points
+
+
+def test_an_entry_coloured_by_curvature(lib, tmp_path):
+    """The torus coloured by K: blue (K < 0) on the inner side, red (K > 0) outside, in the picture."""
+    import matplotlib.image as mpimg
+
+    _, entries = lib.load_catalogue(CATALOGUE)
+    torus = next(e for e in entries if e.name == "Torus coloured by Gaussian curvature")
+    assert torus.colour == "gaussian"
+    rec = lib.run_entry(torus, tmp_path, size=160, coarse=16, fine=16)
+    assert rec["ok"], rec["error"]
+    img = mpimg.imread(tmp_path / rec["files"]["png"])[..., :3].astype(float)
+    red = img[..., 0] - img[..., 2] > 0.2
+    blue = img[..., 2] - img[..., 0] > 0.2
+    assert red.mean() > 0.02 and blue.mean() > 0.01
+    # The torus is centred on the box: blue nearer the picture's centre of the surface.
+    ys, xs = np.nonzero(red | blue)
+    centre = np.array([ys.mean(), xs.mean()])
+    dist = lambda mask: np.linalg.norm(np.argwhere(mask) - centre, axis=1).mean()  # noqa: E731
+    assert dist(blue) < 0.8 * dist(red)
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[entry]]\nname = "x"\nequation = "x"\nbox = [[0, 1], [0, 1], [0, 1]]\nexpected = []\n'
+                   'colour = "rainbow"\n')
+    with pytest.raises(lib.CatalogueError, match="colour"):
+        lib.load_catalogue(bad)
