@@ -206,8 +206,11 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
             # there; the leaves meeting its boundary go to the fine level.
             tree = refine_stars(surf, first, cubes)
             events = compute_events(surf, tree)
-            links = face_links(surf, tree, events)
         group, stars, clashes = group_stars(tree, cubes, centres)
+        if cubes is not None:
+            # No links inside the stars (their cones replace the surface
+            # there); the tubes are found from all links.
+            links = face_links(surf, tree, events, group=None if len(curves.points) else group)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id

@@ -258,9 +258,12 @@ class Surface(abc.ABC):
         """
         p = np.array(points, dtype=float)
         for _ in range(iterations):
-            g = self.gradient(p) if free is None else self.gradient(p) * free
+            # F and grad F in one pass (the same values as apart).
+            f, g = self.value_gradient(p)
+            if free is not None:
+                g = g * free
             gg = np.einsum("ij,ij->i", g, g)
-            step = np.where(gg > 0, self(p) / np.where(gg > 0, gg, 1.0), 0.0)
+            step = np.where(gg > 0, f / np.where(gg > 0, gg, 1.0), 0.0)
             p = p - step[:, None] * g
         return p
 
@@ -319,12 +322,15 @@ class Surface(abc.ABC):
         """
 
     @abc.abstractmethod
-    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray,
+                   rows: np.ndarray | None = None) -> np.ndarray:
         """(N,) int64: how F = 0 lies on the face normal to ``n`` of each box.
 
         ``side`` (N,) picks the low (0) or high (1) face; with u = (n+1)%3,
         v = (n+2)%3: 0 if the curve is known to be a graph over u (F_v of
         one sign on the face), 1 if over v (F_u of one sign), 2 if neither.
+        With ``rows`` (K,), only the boxes ``data[rows]`` (without copying
+        their data), ``side`` (K,) and the result (K,) theirs.
         """
 
     @abc.abstractmethod
@@ -559,9 +565,10 @@ class PolynomialSurface(Surface):
         """:func:`singmesh.boxes.polynomial_bounds.monotone_axis`."""
         return polynomial_bounds.monotone_axis(data)
 
-    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray,
+                   rows: np.ndarray | None = None) -> np.ndarray:
         """:func:`singmesh.boxes.polynomial_bounds.face_modes`."""
-        return polynomial_bounds.face_modes(data, n, side)
+        return polynomial_bounds.face_modes(data, n, side, rows)
 
     def may_vanish(self, data: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
         """Bernstein coefficients of F and of each derivative of both signs,
