@@ -35,8 +35,10 @@ def empty_boxes(tensors: np.ndarray) -> np.ndarray:
     box would leave a hole in the faces that carry the events found there.
     """
     flat = tensors.reshape(len(tensors), -1)
-    slack = tol.PRUNE_SLACK * np.abs(flat).max(axis=1)
-    return (flat.min(axis=1) > slack) | (flat.max(axis=1) < -slack)
+    lo, hi = flat.min(axis=1), flat.max(axis=1)
+    # max |c| is max(hi, -lo) to the bit: no pass over |flat|.
+    slack = tol.PRUNE_SLACK * np.maximum(hi, -lo)
+    return (lo > slack) | (hi < -slack)
 
 
 def face_without_loops(face: np.ndarray) -> np.ndarray:
@@ -127,8 +129,9 @@ def may_vanish(tensors: np.ndarray, axes, dust: float) -> np.ndarray:
             break
         c = t if a is None else derivative(t, a)
         flat = c.reshape(len(c), -1)
-        slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
-        keep = (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+        lo, hi = flat.min(axis=1), flat.max(axis=1)
+        slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(hi, -lo), dust)
+        keep = (lo <= slack) & (hi >= -slack)
         if not keep.all():
             t, live = t[keep], live[keep]
     out = np.zeros(len(tensors), bool)
