@@ -364,9 +364,10 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
                                   <= tol.SNAP_DISTANCE * size))[0]
     top = 1 << tree.fine_level
     free = (lattice[near] > 0) & (lattice[near] < top)   # axes along which the point may move
-    q, ok = _onto_surface(surface, tree.lattice_to_space(lattice[near]), free, 4 * tol.SNAP_DISTANCE * size)
-    near = near[ok]
-    point[near] = q[ok]
+    if len(near):  # usually none: no Newton steps on empty arrays
+        q, ok = _onto_surface(surface, tree.lattice_to_space(lattice[near]), free, 4 * tol.SNAP_DISTANCE * size)
+        near = near[ok]
+        point[near] = q[ok]
     m = (1 << tree.fine_level) + 1
     lattice_key = (lattice[:, 0].astype(np.int64) * m + lattice[:, 1].astype(np.int64)) * m \
         + lattice[:, 2].astype(np.int64)
