@@ -109,7 +109,7 @@ def by_coarse(repeat: int) -> None:
             m = runs[-1][2]
             leaves = m.stats["leaves"]
             print(f"{name:11s} {coarse:6d} {w:6.3f}s {c:6.3f}s {leaves:7d} {len(m.vertices):8d} "
-                  f"{1000 * c / max(leaves, 1):13.2f}ms", flush=True)
+                  f"{1e6 * c / max(leaves, 1):13.2f}ms", flush=True)
 
 
 def by_nodes(repeat: int) -> None:

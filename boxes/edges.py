@@ -217,11 +217,18 @@ def compute_events(surface: Surface, tree: Octree) -> Events:
 def _zero_lattice_points(surface, tree, corners, uniq):
     """(line, position) of every leaf corner where F is zero, on each line through it."""
     xyz = _corner_xyz(corners)
-    # A lattice point is a corner on up to three lines: F is read once there.
+    # A lattice point is a corner on up to three lines: F is read once
+    # there.  Every leaf corner is the end of one of the leaf's edges along
+    # x, so the corners on the lines along x are all the distinct points;
+    # the (few) zeros among them are looked up for the other lines.
     b = tol.MAX_LEVEL + 1
     packed = (xyz[:, 0] << (2 * b)) | (xyz[:, 1] << b) | xyz[:, 2]
-    distinct, inverse = np.unique(packed, return_inverse=True)
-    zero = surface.is_zero(tree.lattice_to_space(_unpack(distinct, 3, b)))[inverse.ravel()]
+    along_x = corners[:, 0] == 0
+    zero_keys = np.sort(packed[along_x][surface.is_zero(tree.lattice_to_space(xyz[along_x]))])
+    if len(zero_keys) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    at = np.minimum(np.searchsorted(zero_keys, packed), len(zero_keys) - 1)
+    zero = zero_keys[at] == packed
     xyz = xyz[zero]
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
@@ -364,9 +371,10 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
                                   <= tol.SNAP_DISTANCE * size))[0]
     top = 1 << tree.fine_level
     free = (lattice[near] > 0) & (lattice[near] < top)   # axes along which the point may move
-    q, ok = _onto_surface(surface, tree.lattice_to_space(lattice[near]), free, 4 * tol.SNAP_DISTANCE * size)
-    near = near[ok]
-    point[near] = q[ok]
+    if len(near):  # usually none: no Newton steps on empty arrays
+        q, ok = _onto_surface(surface, tree.lattice_to_space(lattice[near]), free, 4 * tol.SNAP_DISTANCE * size)
+        near = near[ok]
+        point[near] = q[ok]
     m = (1 << tree.fine_level) + 1
     lattice_key = (lattice[:, 0].astype(np.int64) * m + lattice[:, 1].astype(np.int64)) * m \
         + lattice[:, 2].astype(np.int64)

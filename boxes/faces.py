@@ -100,19 +100,17 @@ def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
 def graph_modes(surface: Surface, tree: Octree, squares, owner, owner_side) -> np.ndarray:
     """0: the face curve is a graph over u; 1: over v; 2: neither is known.
 
-    Read from the owner's face by ``surface.face_modes``: on the whole
-    ``tree.data`` (each leaf owns at most one square per face), not on a
-    gathered copy of the owners' data.
+    Read from the owner's face by ``surface.face_modes``: on the owners'
+    rows of ``tree.data`` (each leaf owns at most one square per face),
+    not on a gathered copy of their data, nor on every leaf.
     """
     mode = np.full(len(squares), 2, np.int64)
-    n_leaves = len(tree.level)
     for a in range(3):
         for side in (0, 1):
             sel = np.nonzero((squares[:, 0] == a) & (owner_side == side))[0]
             if len(sel) == 0:
                 continue
-            modes = surface.face_modes(tree.data, a, np.full(n_leaves, side, np.int64))
-            mode[sel] = modes[owner[sel]]
+            mode[sel] = surface.face_modes(tree.data, a, np.full(len(sel), side, np.int64), rows=owner[sel])
     return mode
 
 
@@ -188,9 +186,23 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     return sq[a], start, end, bad
 
 
-def face_links(surface: Surface, tree: Octree, events: Events) -> FaceLinks:
-    """Pair the events on every contact square into oriented links (``tree`` made for ``surface``)."""
+def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray | None = None) -> FaceLinks:
+    """Pair the events on every contact square into oriented links (``tree`` made for ``surface``).
+
+    With ``group`` (N,), the box id of every leaf (leaves sharing one are
+    meshed as one box, a star: :func:`singmesh.facets.stars.group_stars`),
+    the squares between two leaves of one box are left out: the box's
+    links are those on its boundary (:func:`singmesh.facets.cycles.box_links`
+    drops the others), and inside a star the cone over its boundary
+    replaces the surface.
+    """
     squares, owner, owner_side = contact_squares(tree)
+    minus, plus = _sides(tree, squares, owner, owner_side)
+    if group is not None:
+        inner = (minus >= 0) & (plus >= 0) & (group[np.maximum(minus, 0)] == group[np.maximum(plus, 0)])
+        if inner.any():
+            keep = ~inner
+            squares, owner, owner_side, minus, plus = (a[keep] for a in (squares, owner, owner_side, minus, plus))
     mode = graph_modes(surface, tree, squares, owner, owner_side)
     inc = square_events(events, squares)
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
@@ -200,7 +212,6 @@ def face_links(surface: Surface, tree: Octree, events: Events) -> FaceLinks:
     if retry.any():
         mode = np.where(retry, 2, mode)
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
-    minus, plus = _sides(tree, squares, owner, owner_side)
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
 

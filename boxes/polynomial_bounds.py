@@ -35,8 +35,10 @@ def empty_boxes(tensors: np.ndarray) -> np.ndarray:
     box would leave a hole in the faces that carry the events found there.
     """
     flat = tensors.reshape(len(tensors), -1)
-    slack = tol.PRUNE_SLACK * np.abs(flat).max(axis=1)
-    return (flat.min(axis=1) > slack) | (flat.max(axis=1) < -slack)
+    lo, hi = flat.min(axis=1), flat.max(axis=1)
+    # max |c| is max(hi, -lo) to the bit: no pass over |flat|.
+    slack = tol.PRUNE_SLACK * np.maximum(hi, -lo)
+    return (lo > slack) | (hi < -slack)
 
 
 def face_without_loops(face: np.ndarray) -> np.ndarray:
@@ -69,7 +71,7 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
     return result
 
 
-def face_modes(tensors: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+def face_modes(tensors: np.ndarray, n: int, side: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
     """How the curve F = 0 lies on one face normal to axis ``n`` of each box.
 
     Parameters
@@ -79,6 +81,8 @@ def face_modes(tensors: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
         The face's normal axis; its tangential axes are u = (n+1)%3, v = (n+2)%3.
     side : (N,) int
         0 for each box's low face, 1 for its high face.
+    rows : (K,) int64, optional
+        Only the boxes ``tensors[rows]`` (``side`` and the result (K,) are theirs).
 
     Returns
     -------
@@ -87,14 +91,20 @@ def face_modes(tensors: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
         2: neither is known.
     """
     # Gather the face's slice only, not the boxes' whole tensors.
-    index = [np.arange(len(tensors)), slice(None), slice(None), slice(None)]
+    index = [np.arange(len(tensors)) if rows is None else np.asarray(rows, np.int64),
+             slice(None), slice(None), slice(None)]
     index[1 + n] = np.where(np.asarray(side) == 1, tensors.shape[1 + n] - 1, 0)
     face = tensors[tuple(index)]
     if n == 1:  # the remaining axes are (x, z) = (v, u)
         face = np.swapaxes(face, 1, 2)
     over_u = sign_definite(np.diff(face, axis=2), (1, 2))  # F_v of one sign
-    over_v = sign_definite(np.diff(face, axis=1), (1, 2))  # F_u of one sign
-    return np.where(over_u, 0, np.where(over_v, 1, 2)).astype(np.int64)
+    mode = np.where(over_u, 0, 2).astype(np.int64)
+    # F_u only where F_v is not of one sign.
+    rest = np.nonzero(~over_u)[0]
+    if len(rest):
+        over_v = sign_definite(np.diff(face[rest], axis=1), (1, 2))  # F_u of one sign
+        mode[rest[over_v]] = 1
+    return mode
 
 
 def may_vanish(tensors: np.ndarray, axes, dust: float) -> np.ndarray:
@@ -119,8 +129,9 @@ def may_vanish(tensors: np.ndarray, axes, dust: float) -> np.ndarray:
             break
         c = t if a is None else derivative(t, a)
         flat = c.reshape(len(c), -1)
-        slack = np.maximum(tol.CANDIDATE_SLACK * np.abs(flat).max(axis=1), dust)
-        keep = (flat.min(axis=1) <= slack) & (flat.max(axis=1) >= -slack)
+        lo, hi = flat.min(axis=1), flat.max(axis=1)
+        slack = np.maximum(tol.CANDIDATE_SLACK * np.maximum(hi, -lo), dust)
+        keep = (lo <= slack) & (hi >= -slack)
         if not keep.all():
             t, live = t[keep], live[keep]
     out = np.zeros(len(tensors), bool)

@@ -39,10 +39,12 @@ def clean_polygons(offsets: np.ndarray, ids: np.ndarray):
     new_offsets = np.concatenate([[0], np.cumsum(counts)])
     # Pinched polygons (a vertex twice, not consecutively): rare, cut in
     # Python; all others pass through as arrays.
-    order = np.lexsort((ids, poly_of))
-    dup = (np.diff(poly_of[order]) == 0) & (np.diff(ids[order]) == 0)
+    # One int64 per (polygon, id), sorted: equal neighbours are repeats
+    # (a plain sort, not a lexsort of two keys).
+    width = np.int64(ids.max()) + 1 if len(ids) else np.int64(1)
+    packed = np.sort(poly_of.astype(np.int64) * width + ids)
     pinched = np.zeros(n_poly, bool)
-    pinched[poly_of[order][1:][dup]] = True
+    pinched[packed[1:][np.diff(packed) == 0] // width] = True
     plain = ~pinched & (counts >= 3)
     keep_entry = plain[poly_of]
     sizes = [counts[plain]]
@@ -84,10 +86,10 @@ def stitch_collinear(offsets: np.ndarray, ids: np.ndarray, src: np.ndarray, vert
     p = vertices[ids]
     first = p[offsets[:-1]][poly_of]
     d2 = np.sum((p - first) ** 2, axis=1)
-    far = np.zeros(n_poly, np.int64)
-    # The vertex farthest from the first one: the line's other end.
-    order = np.lexsort((d2, poly_of))
-    far[poly_of[order]] = order
+    # The vertex farthest from the first one: the line's other end (of
+    # equally far ones the last, NaN counting as farthest, as a sort would
+    # put it).
+    far = _last_max(d2, offsets, poly_of)
     axis = p[far][poly_of] - first
     length = np.linalg.norm(axis, axis=1)
     off = np.linalg.norm(np.cross(p - first, axis), axis=1) / np.maximum(length, 1e-300)
@@ -129,6 +131,22 @@ def stitch_collinear(offsets: np.ndarray, ids: np.ndarray, src: np.ndarray, vert
     sizes = np.concatenate([np.asarray(x, np.int64) for x in sizes])
     return (np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(flat_ids),
             np.concatenate([np.asarray(x, np.int64) for x in srcs]))
+
+
+def _last_max(values: np.ndarray, offsets: np.ndarray, poly_of: np.ndarray) -> np.ndarray:
+    """Index of the largest of ``values`` in each block ``offsets[i]:offsets[i+1]`` (the last of equal ones).
+
+    What ``np.lexsort((values, poly_of))``'s last entry per block is (NaN
+    largest), without the sort; blocks are not empty.
+    """
+    if (np.diff(offsets) == 0).any():
+        far = np.zeros(len(offsets) - 1, np.int64)
+        order = np.lexsort((values, poly_of))
+        far[poly_of[order]] = order
+        return far
+    top = np.maximum.reduceat(values, offsets[:-1])[poly_of]
+    at_top = (values == top) | (np.isnan(top) & np.isnan(values))
+    return np.maximum.reduceat(np.where(at_top, np.arange(len(values)), -1), offsets[:-1])
 
 
 def _zero_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -161,3 +161,25 @@ def stray_cycles(cycles, events, stars: dict, expected: list) -> np.ndarray:
         order = np.argsort(extent, kind="stable")[::-1]
         stray[mine[order[want:]]] = True
     return stray
+
+
+def short_stars(cycles, stars: dict, expected: list) -> list[int]:
+    """Points whose star has fewer link cycles than the branches they have.
+
+    Parameters
+    ----------
+    cycles : Cycles
+        The link cycles of all boxes (a star is one box).
+    stars : dict
+        Box id of each star -> index of its singular point.
+    expected : list
+        Branches of each point by its classification (None if unknown).
+
+    Returns
+    -------
+    list of int
+        The points whose star cube is too large for the cone over its
+        boundary (it joins branches): they shrink and are meshed again.
+    """
+    counts = dict(zip(*np.unique(cycles.box, return_counts=True))) if len(cycles) else {}
+    return [i for box, i in stars.items() if expected[i] is not None and counts.get(box, 0) < expected[i]]

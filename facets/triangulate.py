@@ -41,15 +41,16 @@ def triangle_quality(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
     e0 = p[..., 1, :] - p[..., 0, :]
     e1 = p[..., 2, :] - p[..., 1, :]
     e2 = p[..., 0, :] - p[..., 2, :]
+    # Each side's length once (|-e| is |e| to the bit: the same squares).
+    n0, n1, n2 = (np.linalg.norm(e, axis=-1) for e in (e0, e1, e2))
+    m0, m1, m2 = -e0, -e1, -e2
 
-    def angle(a, b):
-        na = np.linalg.norm(a, axis=-1)
-        nb = np.linalg.norm(b, axis=-1)
+    def angle(a, b, na, nb):
         c = np.einsum("...i,...i->...", a, b) / np.maximum(na * nb, 1e-300)
         return np.arccos(np.clip(c, -1.0, 1.0))
 
-    ang = np.minimum(np.minimum(angle(e0, -e2), angle(e1, -e0)), angle(e2, -e1))
-    facing = np.einsum("...i,...i->...", np.cross(e0, -e2), normal)
+    ang = np.minimum(np.minimum(angle(e0, m2, n0, n2), angle(e1, m0, n1, n0)), angle(e2, m1, n2, n1))
+    facing = np.einsum("...i,...i->...", np.cross(e0, m2), normal)
     return np.where(facing > 0, ang, -1.0)
 
 
@@ -164,7 +165,13 @@ def triangulate_polygons(
 
 def _triple_keys(tri: np.ndarray, n_vertices: int) -> np.ndarray:
     """One int64 per unordered vertex triple (exact while n_vertices < 2**21)."""
-    t = np.sort(tri, axis=-1).astype(np.int64)
+    # The three sorted by min, max and the rest (exact on ints): np.sort
+    # along an axis of 3 is a call per row.
+    tri = np.asarray(tri, np.int64)
+    a, b, c = tri[..., 0], tri[..., 1], tri[..., 2]
+    lo = np.minimum(np.minimum(a, b), c)
+    hi = np.maximum(np.maximum(a, b), c)
+    t = np.stack([lo, a + b + c - lo - hi, hi], axis=-1)
     if n_vertices >= 1 << 21:  # pragma: no cover - meshes of 2M vertices
         t = t % (1 << 21)
     return (t[..., 0] << 42) | (t[..., 1] << 21) | t[..., 2]
@@ -202,8 +209,21 @@ def _template_quality(poly: np.ndarray, points: np.ndarray, normals: np.ndarray)
     return triangle_quality(points[poly[:, combos]], normal[:, None, :])
 
 
+@lru_cache(maxsize=None)
 def _combos(n: int) -> np.ndarray:
-    return np.array(list(combinations(range(n), 3)))
+    """All vertex triples (i < j < k) of an n-gon: (C(n, 3), 3)."""
+    out = np.array(list(combinations(range(n), 3)))
+    out.flags.writeable = False
+    return out
+
+
+@lru_cache(maxsize=None)
+def _template_combos(n: int) -> np.ndarray:
+    """The triangles of each triangulation of an n-gon as rows of :func:`_combos`: (T, n - 2)."""
+    lookup = {tuple(c): i for i, c in enumerate(_combos(n).tolist())}
+    out = np.array([[lookup[tuple(sorted(t))] for t in tr] for tr in polygon_triangulations(n).tolist()])
+    out.flags.writeable = False
+    return out
 
 
 def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | None = None,
@@ -217,8 +237,7 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
     n = poly.shape[1]
     templates = polygon_triangulations(n)
     combos = _combos(n)
-    lookup = {tuple(c): i for i, c in enumerate(combos)}
-    tmpl_idx = np.array([[lookup[tuple(sorted(t))] for t in tr] for tr in templates])
+    tmpl_idx = _template_combos(n)
     if forbidden is not None and len(forbidden):
         q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), -2.0, q)
     if forbidden_edges is not None and len(forbidden_edges):

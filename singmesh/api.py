@@ -9,7 +9,7 @@ from functools import partial
 
 import numpy as np
 from scipy.spatial import cKDTree
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links, leaf_sides
@@ -17,12 +17,11 @@ from singmesh.boxes.octree import refine_stars, subdivide
 from singmesh.boxes.sizing import CurvatureSizing
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
-from singmesh.facets.fans import insert_link_nodes, sector_polygons
-from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
-from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
+from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, point_key
+from singmesh.facets.records import curve_graph, curve_records
+from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
+from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
-from singmesh.skeleton.curves import skeleton_links_many
-from singmesh.skeleton.directions import skeleton_directions
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.skeleton.tips import root_creases, tip_points
@@ -128,8 +127,23 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, size: s
     # 29.9 s with one).
     # Non-polynomial F are NaN outside their domain and infinite at poles:
     # the stages handle such values, numpy need not warn of each.
-    with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+    with _one_blas_thread(), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         return _mesh(surface, box, coarse, fine, params, (size, min_edge, max_edge, chord))
+
+
+_BLAS: list = []
+
+
+def _one_blas_thread():
+    """A context limiting the BLAS libraries to one thread.
+
+    The libraries are found once per process (threadpoolctl's scan of the
+    loaded libraries is about 1 ms, 4% of a sphere's mesh): numpy's and
+    scipy's, which singmesh's imports have loaded before the first call.
+    """
+    if not _BLAS:
+        _BLAS.append(ThreadpoolController())
+    return _BLAS[0].limit(limits=1, user_api="blas")
 
 
 def _sizing_levels(size: str, min_edge, max_edge, chord, fine_level: int) -> tuple[int, int, float] | None:
@@ -208,7 +222,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
     # Points on the curves are their special points (pinch and triple
     # points): the point search leaves the curves alone.  A curve it sees
     # that was not traced (``overflow``) is reported, not meshed.
-    avoid = _curve_points(curves, 0.25 * float(cell.max())) if len(curves.points) else None
+    avoid = curve_samples(curves.points, curves.edges, 0.25 * float(cell.max())) if len(curves.points) else None
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL),
                                        avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()))
     # Where a root of a sum of squares in F vanishes on the surface (a
@@ -256,8 +270,11 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
             # there; the leaves meeting its boundary go to the fine level.
             tree = refine_stars(surf, first, cubes)
             events = compute_events(surf, tree)
-            links = face_links(surf, tree, events)
         group, stars, clashes = group_stars(tree, cubes, centres)
+        if cubes is not None:
+            # No links inside the stars (their cones replace the surface
+            # there); the tubes are found from all links.
+            links = face_links(surf, tree, events, group=None if len(curves.points) else group)
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id
@@ -266,17 +283,17 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
         # A star too large for the cone over its boundary to be the surface
         # in it joins branches: fewer link cycles than the classifier's
         # branches.  Those stars shrink by half and are meshed again.
-        few = _short_stars(cycles, stars, expected)
+        few = short_stars(cycles, stars, expected)
         if not few or attempt == tol.STAR_RETRIES:
             break
         cubes = shrink_cubes(first, cubes, centres, few)
 
-    offsets, keys, pts, apex, branches = _polygons(surf, tree, events, links, cycles, stars, points, tube_id)
-    curve_key0 = _curve_key0(events)
+    offsets, keys, pts, apex, branches = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id)
+    key0 = curve_key0(events)
     if len(curves.points):
-        offsets, keys, pts, apex = _add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
-                                               tube_id, curve_key0, float(cell.max()), b)
-    fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
+        offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
+                                              tube_id, key0, float(cell.max()), b)
+    fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
     # Where two axis skeletons meet (normal along an axis), for reference:
@@ -284,10 +301,10 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
     node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
     singular = []
     for i, sp in enumerate(points):
-        where = np.nonzero(vkeys == _point_key(i))[0]
+        where = np.nonzero(vkeys == point_key(i))[0]
         singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
                                 branches=branches.get(i, 0), classification=kinds[i]))
-    curve_list, special = _curve_records(curves, vkeys, curve_key0)
+    curve_list, special = curve_records(curves, vkeys, key0)
     stats = {
         "leaves": len(tree.level),
         "non_simple_leaves": int((~tree.simple).sum()),
@@ -314,7 +331,7 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
              skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
-             special_points=special, curve_graph=_curve_graph(curves, vkeys, curve_key0))
+             special_points=special, curve_graph=curve_graph(curves, vkeys, key0))
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
@@ -333,7 +350,7 @@ def _skeleton_source(surf: Surface, box: np.ndarray, level: int):
 
 def _find_skeleton_nodes(surf: Surface, box: np.ndarray, level: int):
     """:func:`skeleton_nodes` with one BLAS thread and without warnings, as in :func:`mesh`."""
-    with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+    with _one_blas_thread(), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         return skeleton_nodes(surf, box, level=level)
 
 
@@ -380,150 +397,3 @@ def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> in
     more = int(np.ceil(np.log2(tol.STAR_MIN_GAP / max(gap, 1e-300))))
     return min(fine_level + min(more, tol.STAR_MAX_RAISE), tol.MAX_LEVEL)
 
-
-def _short_stars(cycles, stars: dict, expected: list) -> list[int]:
-    """Points whose star has fewer link cycles than the branches they have."""
-    counts = dict(zip(*np.unique(cycles.box, return_counts=True))) if len(cycles) else {}
-    return [i for box, i in stars.items() if expected[i] is not None and counts.get(box, 0) < expected[i]]
-
-
-def _point_key(i: int) -> int:
-    """Vertex key of singular point i: below all event keys (which are >= 0)."""
-    return -1 - i
-
-
-def _square_bounds_many(tree, squares: np.ndarray):
-    """(axis, lo, hi) in space of contact square rows (n, plane, u0, v0, size): (K,), (K, 3), (K, 3)."""
-    squares = np.asarray(squares, np.int64).reshape(-1, 5)
-    n, plane, u0, v0, size = squares.T
-    rows = np.arange(len(n))
-    lo = np.zeros((len(n), 3), np.int64)
-    lo[rows, n], lo[rows, (n + 1) % 3], lo[rows, (n + 2) % 3] = plane, u0, v0
-    hi = lo.copy()
-    hi[rows, (n + 1) % 3] += size
-    hi[rows, (n + 2) % 3] += size
-    return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
-
-
-def _curve_points(curves, spacing: float) -> np.ndarray:
-    """Points along all singular curves, ``spacing`` apart."""
-    return curve_samples(curves.points, curves.edges, spacing)
-
-
-def _curve_key0(events) -> int:
-    """First vertex key of the curve vertices: above every event and sector node key."""
-    return (int(events.key.max()) + 1 if len(events.key) else 0) + (1 << 40)
-
-
-def _add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id, key0, cell, box):
-    """The polygons with the tube's strips (triangles from rails to the curve) appended."""
-    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box)
-    n = len(tri_keys)
-    offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
-    keys = np.concatenate([keys, tri_keys.ravel()])
-    pts = np.concatenate([pts, tri_pts.reshape(-1, 3)])
-    apex = np.concatenate([apex, np.zeros(n, bool)])
-    return offsets, keys, pts, apex
-
-
-def _vertex_of(vkeys, keys):
-    """Mesh vertex of each key, -1 for keys no vertex has."""
-    if len(vkeys) == 0:
-        return np.full(len(keys), -1, np.int64)
-    order = np.argsort(vkeys)
-    pos = np.minimum(np.searchsorted(vkeys[order], keys), max(len(vkeys) - 1, 0))
-    hit = (len(vkeys) > 0) & (vkeys[order][pos] == keys)
-    return np.where(hit, order[pos], -1)
-
-
-def _curve_records(curves, vkeys, key0):
-    """The curves' pieces and special points with their mesh vertices filled in."""
-    if len(curves.points) == 0:
-        return [], []
-    vert = _vertex_of(vkeys, key0 + np.arange(len(curves.points)))
-    # Points no triangle has (an isolated line) follow the vertices, as in
-    # Mesh.curve_lines().
-    alone = vert < 0
-    vert[alone] = len(vkeys) + np.arange(alone.sum())
-    pieces = [replace(c, vertices=vert[c.vertices]) for c in curves.pieces]
-    special = [replace(sp, vertex=int(vert[v])) for sp, v in zip(curves.special, curves.special_vertex.tolist())]
-    return pieces, special
-
-
-def _curve_graph(curves, vkeys, key0):
-    """The curve graph: its points, edges (point pairs) and the mesh vertex of each point (-1: none)."""
-    if len(curves.points) == 0:
-        return np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    return curves.points, curves.edges, _vertex_of(vkeys, key0 + np.arange(len(curves.points)))
-
-
-def _polygons(surf, tree, events, links, cycles, stars, points, tube_id=-1):
-    """Facet polygons (offsets, keys, points, apex flags) and branch counts.
-
-    Plain boxes give one polygon per cycle; the star of a singular point
-    gives sectors fanning into it (:mod:`singmesh.facets.fans`).
-    """
-    sizes = np.diff(cycles.offsets)
-    plain = ~np.isin(cycles.box, list(stars))
-    plain |= stray_cycles(cycles, events, stars, [getattr(sp.classification, "branches", None) for sp in points])
-    tube = cycles.box == tube_id  # meshed as strips
-    plain &= ~tube
-    ev = cycles.events
-    owner = np.repeat(np.arange(len(cycles)), sizes)
-    keep = plain[owner]
-    parts_keys = [events.key[ev[keep]]]
-    parts_pts = [events.point[ev[keep]]]
-    parts_sq = [cycles.squares[keep]]
-    parts_sizes = [sizes[plain]]
-    apex = [np.zeros(plain.sum(), bool)]
-    branches = {}
-    splits = {}
-    next_key = int(events.key.max()) + 1 if len(events.key) else 0
-    star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
-    # The face squares of all star cycles' links at once; the Hessian and
-    # the skeleton directions once per point (a node has two cycles).
-    spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
-    sq_axis, sq_lo, sq_hi = _square_bounds_many(
-        tree, links.square[np.concatenate([cycles.squares[a:b] for a, b in spans]) if spans else np.zeros(0, np.int64)])
-    directions = {}
-    # The skeleton curves of all star cycles are traced in one batch.
-    jobs = []
-    done = 0
-    for c, (a, b) in zip(star_cycles, spans):
-        i = stars[cycles.box[c]]
-        p = points[i].point
-        if i not in directions:
-            hess = surf.hessian(p)
-            # A tip (F not differentiable there) has no Hessian and no skeleton.
-            directions[i] = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
-        e = done + b - a
-        squares = list(zip(sq_axis[done:e].tolist(), sq_lo[done:e], sq_hi[done:e]))
-        done = e
-        jobs.append((p, events.point[ev[a:b]], squares, directions[i]))
-    all_spokes = skeleton_links_many(surf, jobs)
-    star_keys, star_pts, star_sizes = [], [], []
-    for c, spokes in zip(star_cycles, all_spokes):
-        i = stars[cycles.box[c]]
-        p = points[i].point
-        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
-        cyc = ev[span]
-        cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
-        polys, split, next_key = sector_polygons(_point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
-                                                 cycle_squares=cycles.squares[span])
-        splits.update(split)
-        star_keys.append(polys[0])
-        star_pts.append(polys[1])
-        star_sizes += polys[2]
-        branches[i] = branches.get(i, 0) + 1
-    if star_sizes:
-        # Large ones fan from their first vertex, p or a traced point.
-        parts_keys.append(np.concatenate(star_keys))
-        parts_pts.append(np.concatenate(star_pts))
-        parts_sq.append(np.full(sum(star_sizes), -1, np.int64))
-        parts_sizes.append(star_sizes)
-        apex.append(np.ones(len(star_sizes), bool))
-    sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
-    offsets = np.concatenate([[0], np.cumsum(sizes)])
-    offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
-                                           np.concatenate(parts_sq), splits)
-    return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches

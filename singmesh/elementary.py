@@ -423,9 +423,11 @@ class ElementarySurface(Surface):
                 break
         return result
 
-    def face_modes(self, data: np.ndarray, n: int, side) -> np.ndarray:
-        """0: F_v of one sign on the face (graph over u); 1: F_u of one sign; 2: neither."""
-        lo, hi = self.corners(data)
+    def face_modes(self, data: np.ndarray, n: int, side, rows: np.ndarray | None = None) -> np.ndarray:
+        """0: F_v of one sign on the face (graph over u); 1: F_u of one sign; 2: neither.
+
+        With ``rows``, the boxes ``data[rows]`` only (``side`` theirs)."""
+        lo, hi = self.corners(data if rows is None else data[rows])
         lo, hi = self._face(lo, hi, n, side)
         u, v = (n + 1) % 3, (n + 2) % 3
         r = self._gradient_bounds(lo, hi, (u, v))

@@ -24,6 +24,7 @@ import abc
 import itertools
 import math
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Mapping
 
 import numpy as np
@@ -269,9 +270,12 @@ class Surface(abc.ABC):
         """
         p = np.array(points, dtype=float)
         for _ in range(iterations):
-            g = self.gradient(p) if free is None else self.gradient(p) * free
+            # F and grad F in one pass (the same values as apart).
+            f, g = self.value_gradient(p)
+            if free is not None:
+                g = g * free
             gg = np.einsum("ij,ij->i", g, g)
-            step = np.where(gg > 0, self(p) / np.where(gg > 0, gg, 1.0), 0.0)
+            step = np.where(gg > 0, f / np.where(gg > 0, gg, 1.0), 0.0)
             p = p - step[:, None] * g
         return p
 
@@ -330,12 +334,15 @@ class Surface(abc.ABC):
         """
 
     @abc.abstractmethod
-    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray,
+                   rows: np.ndarray | None = None) -> np.ndarray:
         """(N,) int64: how F = 0 lies on the face normal to ``n`` of each box.
 
         ``side`` (N,) picks the low (0) or high (1) face; with u = (n+1)%3,
         v = (n+2)%3: 0 if the curve is known to be a graph over u (F_v of
         one sign on the face), 1 if over v (F_u of one sign), 2 if neither.
+        With ``rows`` (K,), only the boxes ``data[rows]`` (without copying
+        their data), ``side`` (K,) and the result (K,) theirs.
         """
 
     @abc.abstractmethod
@@ -414,30 +421,9 @@ class PolynomialSurface(Surface):
     def _from_expr(cls, expr, text: str, values: Mapping[str, sympy.Expr],
                    rounding: float = 0.0) -> "PolynomialSurface":
         """The polynomial ``expr`` (checked, expanded) as a surface."""
-        check_variables(expr)
-        _check_polynomial(expr)
-        expr = sympy.expand(expr)
-        try:
-            poly = sympy.Poly(expr, *VARIABLES)
-        except sympy.PolynomialError as exc:  # pragma: no cover - caught above
-            raise SurfaceError(f"not a polynomial in x, y, z: {exc}") from None
-        if poly.is_zero:
-            raise SurfaceError("the polynomial is identically zero: every point is on it")
-        degree = poly.total_degree()
-        if degree > MAX_DEGREE:
-            raise SurfaceError(
-                f"degree {degree} is over the limit of {MAX_DEGREE} "
-                "(Bernstein forms lose too much precision beyond it)"
-            )
-        if degree == 0:
-            raise SurfaceError("the polynomial is a nonzero constant: its zero set is empty")
-        dims = [max(m[a] for m in poly.monoms()) + 1 for a in range(3)]
-        coeffs = np.zeros(dims)
-        for monom, c in poly.terms():
-            coeffs[monom] = _to_float(c, monom)
-        if not np.any(coeffs):
-            raise SurfaceError("all coefficients round to zero in double precision")
-        return cls(text=text, expr=expr, coeffs=coeffs, degree=degree,
+        expr, coeffs, degree = _polynomial_tensor(expr)
+        # Each surface has its own tensor (the cached one is never handed out).
+        return cls(text=text, expr=expr, coeffs=coeffs.copy(), degree=degree,
                    params={k: float(v) for k, v in values.items()},
                    rounding=max(float(rounding), float(np.finfo(float).eps)))
 
@@ -572,9 +558,10 @@ class PolynomialSurface(Surface):
         """:func:`singmesh.boxes.polynomial_bounds.monotone_axis`."""
         return polynomial_bounds.monotone_axis(data)
 
-    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray) -> np.ndarray:
+    def face_modes(self, data: np.ndarray, n: int, side: np.ndarray,
+                   rows: np.ndarray | None = None) -> np.ndarray:
         """:func:`singmesh.boxes.polynomial_bounds.face_modes`."""
-        return polynomial_bounds.face_modes(data, n, side)
+        return polynomial_bounds.face_modes(data, n, side, rows)
 
     def may_vanish(self, data: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
         """Bernstein coefficients of F and of each derivative of both signs,
@@ -599,6 +586,42 @@ class PolynomialSurface(Surface):
 
     def __repr__(self) -> str:
         return f"PolynomialSurface({str(self)!r}, degree={self.degree})"
+
+
+@lru_cache(maxsize=64)
+def _polynomial_tensor(expr: sympy.Expr) -> tuple[sympy.Expr, np.ndarray, int]:
+    """The polynomial ``expr`` checked and expanded, its monomial tensor (read-only) and degree.
+
+    Cached per expression (sympy's == tells 2.0 from 2 and Floats of other
+    precisions apart): meshing one surface again (another box, another
+    resolution) does not expand and convert it again (2 of Barth's 4 ms of
+    parsing, 0.15 of a sphere's 0.4 ms).
+    """
+    check_variables(expr)
+    _check_polynomial(expr)
+    expr = sympy.expand(expr)
+    try:
+        poly = sympy.Poly(expr, *VARIABLES)
+    except sympy.PolynomialError as exc:  # pragma: no cover - caught above
+        raise SurfaceError(f"not a polynomial in x, y, z: {exc}") from None
+    if poly.is_zero:
+        raise SurfaceError("the polynomial is identically zero: every point is on it")
+    degree = poly.total_degree()
+    if degree > MAX_DEGREE:
+        raise SurfaceError(
+            f"degree {degree} is over the limit of {MAX_DEGREE} "
+            "(Bernstein forms lose too much precision beyond it)"
+        )
+    if degree == 0:
+        raise SurfaceError("the polynomial is a nonzero constant: its zero set is empty")
+    dims = [max(m[a] for m in poly.monoms()) + 1 for a in range(3)]
+    coeffs = np.zeros(dims)
+    for monom, c in poly.terms():
+        coeffs[monom] = _to_float(c, monom)
+    if not np.any(coeffs):
+        raise SurfaceError("all coefficients round to zero in double precision")
+    coeffs.flags.writeable = False
+    return expr, coeffs, degree
 
 
 # ---------------------------------------------------------------- checks

@@ -105,8 +105,8 @@ class Delegating(Surface):
     def simple_axis(self, data):
         return self._inner.simple_axis(data)
 
-    def face_modes(self, data, n, side):
-        return self._inner.face_modes(data, n, side)
+    def face_modes(self, data, n, side, rows=None):
+        return self._inner.face_modes(data, n, side, rows)
 
     def may_vanish(self, data, axes):
         return self._inner.may_vanish(data, axes)

@@ -1,0 +1,164 @@
+"""The facet polygons of all boxes: one per link cycle, sectors in stars, strips in tubes.
+
+A plain box's link cycle is one polygon of event keys; the star of a
+singular point gives sectors fanning into it (:mod:`singmesh.facets.fans`),
+its skeleton links traced for all star cycles at once; the tube along
+singular curves gives strips (:mod:`singmesh.facets.tubes`).  The polygons
+go to :func:`singmesh.facets.assemble.assemble` as flat arrays (offsets,
+keys, points, apex flags).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from singmesh.skeleton.curves import skeleton_links_many
+from singmesh.skeleton.directions import skeleton_directions
+
+from .fans import insert_link_nodes, sector_polygons
+from .stars import stray_cycles
+from .tubes import tube_triangles
+
+
+def point_key(i: int) -> int:
+    """Vertex key of singular point i: below all event keys (which are >= 0)."""
+    return -1 - i
+
+
+def curve_key0(events) -> int:
+    """First vertex key of the curve vertices: above every event and sector node key.
+
+    Sector nodes and traced points are numbered from the largest event key
+    on (:func:`facet_polygons`); 2**40 keys later the curve points begin.
+    """
+    return (int(events.key.max()) + 1 if len(events.key) else 0) + (1 << 40)
+
+
+def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list, tube_id: int = -1):
+    """Facet polygons (offsets, keys, points, apex flags) and branch counts.
+
+    Plain boxes give one polygon per cycle; the star of a singular point
+    gives sectors fanning into it (:mod:`singmesh.facets.fans`).
+
+    Parameters
+    ----------
+    surf : Surface
+    tree : Octree
+    events : Events
+    links : FaceLinks
+    cycles : Cycles
+        The link cycles of the boxes, stars and the tube each one box.
+    stars : dict
+        Box id of each star -> index of its singular point in ``points``.
+    points : list of SingularPoint
+    tube_id : int
+        Box id of the tube (its cycles are meshed as strips, not here).
+
+    Returns
+    -------
+    offsets : (P+1,) int64
+        Polygon i is ``keys[offsets[i]:offsets[i+1]]``.
+    keys : (S,) int64
+        Vertex keys (events, singular points :func:`point_key`, sector nodes).
+    pts : (S, 3) float64
+        The position of each entry of ``keys``.
+    apex : (P,) bool
+        Polygons whose first vertex is a singular point (fanned from it).
+    branches : dict
+        Point index -> number of its star's cycles fanned into it.
+    """
+    sizes = np.diff(cycles.offsets)
+    plain = ~np.isin(cycles.box, list(stars))
+    plain |= stray_cycles(cycles, events, stars, [getattr(sp.classification, "branches", None) for sp in points])
+    tube = cycles.box == tube_id  # meshed as strips
+    plain &= ~tube
+    ev = cycles.events
+    owner = np.repeat(np.arange(len(cycles)), sizes)
+    keep = plain[owner]
+    parts_keys = [events.key[ev[keep]]]
+    parts_pts = [events.point[ev[keep]]]
+    parts_sq = [cycles.squares[keep]]
+    parts_sizes = [sizes[plain]]
+    apex = [np.zeros(plain.sum(), bool)]
+    branches = {}
+    splits = {}
+    next_key = int(events.key.max()) + 1 if len(events.key) else 0
+    star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
+    # The face squares of all star cycles' links at once; the Hessian and
+    # the skeleton directions once per point (a node has two cycles).
+    spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
+    sq_axis, sq_lo, sq_hi = _square_bounds_many(
+        tree, links.square[np.concatenate([cycles.squares[a:b] for a, b in spans]) if spans else np.zeros(0, np.int64)])
+    directions = {}
+    # The skeleton curves of all star cycles are traced in one batch.
+    jobs = []
+    done = 0
+    for c, (a, b) in zip(star_cycles, spans):
+        i = stars[cycles.box[c]]
+        p = points[i].point
+        if i not in directions:
+            hess = surf.hessian(p)
+            # A tip (F not differentiable there) has no Hessian and no skeleton.
+            directions[i] = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
+        e = done + b - a
+        squares = list(zip(sq_axis[done:e].tolist(), sq_lo[done:e], sq_hi[done:e]))
+        done = e
+        jobs.append((p, events.point[ev[a:b]], squares, directions[i]))
+    all_spokes = skeleton_links_many(surf, jobs)
+    star_keys, star_pts, star_sizes = [], [], []
+    for c, spokes in zip(star_cycles, all_spokes):
+        i = stars[cycles.box[c]]
+        p = points[i].point
+        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
+        cyc = ev[span]
+        cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
+        polys, split, next_key = sector_polygons(point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
+                                                 cycle_squares=cycles.squares[span])
+        splits.update(split)
+        star_keys.append(polys[0])
+        star_pts.append(polys[1])
+        star_sizes += polys[2]
+        branches[i] = branches.get(i, 0) + 1
+    if star_sizes:
+        # Large ones fan from their first vertex, p or a traced point.
+        parts_keys.append(np.concatenate(star_keys))
+        parts_pts.append(np.concatenate(star_pts))
+        parts_sq.append(np.full(sum(star_sizes), -1, np.int64))
+        parts_sizes.append(star_sizes)
+        apex.append(np.ones(len(star_sizes), bool))
+    sizes = np.concatenate([np.asarray(s, np.int64) for s in parts_sizes])
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
+                                           np.concatenate(parts_sq), splits)
+    return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
+
+
+def _square_bounds_many(tree, squares: np.ndarray):
+    """(axis, lo, hi) in space of contact square rows (n, plane, u0, v0, size): (K,), (K, 3), (K, 3)."""
+    squares = np.asarray(squares, np.int64).reshape(-1, 5)
+    n, plane, u0, v0, size = squares.T
+    rows = np.arange(len(n))
+    lo = np.zeros((len(n), 3), np.int64)
+    lo[rows, n], lo[rows, (n + 1) % 3], lo[rows, (n + 2) % 3] = plane, u0, v0
+    hi = lo.copy()
+    hi[rows, (n + 1) % 3] += size
+    hi[rows, (n + 2) % 3] += size
+    return n, tree.lattice_to_space(lo), tree.lattice_to_space(hi)
+
+
+def add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id: int, key0: int,
+               cell: float, box: np.ndarray):
+    """The polygons with the tube's strips (triangles from rails to the curve) appended.
+
+    ``offsets, keys, pts, apex`` as from :func:`facet_polygons`; the strips
+    are :func:`singmesh.facets.tubes.tube_triangles` of the tube's links
+    (``grouped``: :func:`singmesh.facets.cycles.box_links` with the tube as
+    box ``tube_id``), the curve points keyed from ``key0`` on.
+    """
+    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box)
+    n = len(tri_keys)
+    offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
+    keys = np.concatenate([keys, tri_keys.ravel()])
+    pts = np.concatenate([pts, tri_pts.reshape(-1, 3)])
+    apex = np.concatenate([apex, np.zeros(n, bool)])
+    return offsets, keys, pts, apex

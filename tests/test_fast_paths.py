@@ -1,0 +1,154 @@
+"""The fast paths of issue #11 against the plain computations they replace.
+
+Each shortcut (face modes on a subset of rows, face links without the
+squares inside a star, the zero lattice points read on the lines along x,
+a polygon's farthest vertex without a sort, sorted vertex triples without
+np.sort) must give what the straightforward computation gives, bit for
+bit, on inputs as users give them (float coefficients, a float-rotated
+surface, lattice points on the surface).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from singmesh import tolerances as tol
+from singmesh.boxes import edges as edges_mod
+from singmesh.boxes.edges import compute_events
+from singmesh.boxes.faces import face_links
+from singmesh.boxes.octree import subdivide
+from singmesh.facets.assemble import _last_max
+from singmesh.facets.triangulate import _triple_keys
+from singmesh.surface import Surface
+
+from test_rounded import float_rotated
+
+BOX = np.array([[-1.0, 1.0]] * 3)
+
+
+def _surfaces():
+    return [
+        Surface.parse("4(x^2+y^2+z^2) + 16 x y z - 1"),          # Cayley: nodes
+        Surface.parse("x^2 - y^2 z"),                             # zeros along lattice lines
+        Surface.parse(float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]),
+        Surface.parse("max(abs(x), abs(y), abs(z)) - 0.5"),       # intervals, corners on the lattice
+    ]
+
+
+@pytest.fixture(scope="module", params=range(4), ids=["cayley", "whitney", "rotated cone", "cube"])
+def tree_of(request):
+    surface = _surfaces()[request.param]
+    return surface, subdivide(surface, BOX, 3, 5)
+
+
+def test_face_modes_on_rows_are_the_rows_of_all(tree_of):
+    surface, tree = tree_of
+    rng = np.random.default_rng(1)
+    rows = np.sort(rng.choice(len(tree.level), size=len(tree.level) // 2, replace=False))
+    for n in range(3):
+        side = rng.integers(0, 2, len(rows))
+        full = np.full(len(tree.level), 0, np.int64)
+        full[rows] = side
+        want = surface.face_modes(tree.data, n, full)[rows]
+        assert np.array_equal(surface.face_modes(tree.data, n, side, rows=rows), want)
+
+
+def test_links_without_inner_squares_are_the_others(tree_of):
+    """Leaves grouped in blocks: the links given the groups are those of the squares between blocks."""
+    surface, tree = tree_of
+    events = compute_events(surface, tree)
+    everything = face_links(surface, tree, events)
+    block = tree.corner // 8  # lattice blocks of 8 fine cells: leaves in one share an id
+    _, group = np.unique(block, axis=0, return_inverse=True)
+    group = group.ravel().astype(np.int64) + len(tree.level)
+    fewer = face_links(surface, tree, events, group=group)
+    m, p = everything.minus, everything.plus
+    inner = (m >= 0) & (p >= 0) & (group[np.maximum(m, 0)] == group[np.maximum(p, 0)])
+    assert inner.any() and (~inner).any()
+    assert np.array_equal(fewer.square, everything.square[~inner])
+    assert np.array_equal(fewer.minus, m[~inner]) and np.array_equal(fewer.plus, p[~inner])
+    kept = ~inner[everything.link_square]
+    old_to_new = np.cumsum(~inner) - 1
+    assert np.array_equal(fewer.link_square, old_to_new[everything.link_square[kept]])
+    assert np.array_equal(fewer.start, everything.start[kept])
+    assert np.array_equal(fewer.end, everything.end[kept])
+    assert np.array_equal(fewer.ambiguous, everything.ambiguous[~inner])
+
+
+def _zero_points_by_unique(surface, tree, corners, uniq):
+    """The zero lattice points as read before: F once per distinct lattice point (np.unique)."""
+    xyz = edges_mod._corner_xyz(corners)
+    b = tol.MAX_LEVEL + 1
+    packed = (xyz[:, 0] << (2 * b)) | (xyz[:, 1] << b) | xyz[:, 2]
+    distinct, inverse = np.unique(packed, return_inverse=True)
+    zero = surface.is_zero(tree.lattice_to_space(edges_mod._unpack(distinct, 3, b)))[inverse.ravel()]
+    xyz, a = xyz[zero], corners[zero, 0]
+    r = np.arange(len(a))
+    return np.searchsorted(uniq, edges_mod.line_keys(a, xyz[r, (a + 1) % 3], xyz[r, (a + 2) % 3])), xyz[r, a]
+
+
+def test_zero_lattice_points_as_by_unique(tree_of, monkeypatch):
+    surface, tree = tree_of
+    seen = []
+
+    def both(surface, tree, corners, uniq):
+        got = fast(surface, tree, corners, uniq)
+        want = _zero_points_by_unique(surface, tree, corners, uniq)
+        seen.append(len(want[0]))
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+        return got
+
+    fast = edges_mod._zero_lattice_points
+    monkeypatch.setattr(edges_mod, "_zero_lattice_points", both)
+    compute_events(surface, tree)
+    assert seen
+
+
+def test_zero_lattice_points_are_the_exact_zeros(monkeypatch):
+    """x^2 - y^2 z at the leaf corners (dyadic, so F is exact in floats): the
+    (line, position) pairs read are the corners where F is 0, on every line."""
+    surface = Surface.parse("x^2 - y^2 z")
+    tree = subdivide(surface, BOX, 3, 5)
+    seen = []
+
+    def spy(surface, tree, corners, uniq):
+        out = fast(surface, tree, corners, uniq)
+        seen.append((corners, uniq, out))
+        return out
+
+    fast = edges_mod._zero_lattice_points
+    monkeypatch.setattr(edges_mod, "_zero_lattice_points", spy)
+    compute_events(surface, tree)
+    (corners, uniq, (line, pos)), = seen
+    a, u, v, s = corners.T
+    xyz = np.zeros((len(a), 3))
+    r = np.arange(len(a))
+    xyz[r, a], xyz[r, (a + 1) % 3], xyz[r, (a + 2) % 3] = s, u, v
+    x, y, z = (BOX[:, 0] + xyz * (BOX[:, 1] - BOX[:, 0]) / 32).T
+    exact = x * x - y * y * z == 0
+    assert exact.sum() > 100
+    want = np.searchsorted(uniq, edges_mod.line_keys(a[exact], u[exact], v[exact])) * 64 + s[exact]
+    assert np.array_equal(np.sort(line * 64 + pos), np.sort(want))
+
+
+def test_last_max_is_the_sorts_last():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        sizes = rng.integers(1, 7, rng.integers(1, 30))
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        poly_of = np.repeat(np.arange(len(sizes)), sizes)
+        values = rng.integers(0, 4, offsets[-1]).astype(float) * 0.1
+        values[rng.random(len(values)) < 0.1] = np.nan
+        want = np.zeros(len(sizes), np.int64)
+        order = np.lexsort((values, poly_of))
+        want[poly_of[order]] = order
+        assert np.array_equal(_last_max(values, offsets, poly_of), want)
+
+
+def test_triple_keys_of_sorted_triples():
+    rng = np.random.default_rng(4)
+    tri = rng.integers(0, 1000, (5000, 3))
+    tri[::7, 1] = tri[::7, 0]
+    t = np.sort(tri, axis=1)
+    assert np.array_equal(_triple_keys(tri, 1000), (t[:, 0] << 42) | (t[:, 1] << 21) | t[:, 2])
