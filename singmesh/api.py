@@ -17,6 +17,7 @@ from singmesh.boxes.octree import refine_stars, subdivide
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.fans import insert_link_nodes, sector_polygons
+from singmesh.facets.improve import improve_mesh
 from singmesh.facets.stars import group_stars, shrink_cubes, star_cubes, stray_cycles
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions, tube_triangles
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
@@ -64,7 +65,8 @@ def check_box(box) -> np.ndarray:
     return b
 
 
-def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **params) -> Mesh:
+def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,
+         **params) -> Mesh:
     """Mesh the real surface F = 0 inside ``box``.
 
     Parameters
@@ -87,6 +89,12 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
         ``CREASE_MAX_RAISE`` times (``Mesh.stats["crease_gap"]``: their
         distance in boxes at the level used);
         ``Mesh.stats["fine"]`` is the value used.
+    improve : bool
+        Make the triangles well-shaped (:mod:`singmesh.facets.improve`):
+        edge flips and vertices moved on the surface, keeping the singular
+        points, the curves, the box's corners and the topology.  False
+        gives the triangles as the boxes make them, vertices at the
+        crossings with the lattice.
     **params
         Values of named parameters of the equation.
 
@@ -107,10 +115,10 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, **param
     # Non-polynomial F are NaN outside their domain and infinite at poles:
     # the stages handle such values, numpy need not warn of each.
     with threadpool_limits(limits=1, user_api="blas"), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return _mesh(surface, box, coarse, fine, params)
+        return _mesh(surface, box, coarse, fine, improve, params)
 
 
-def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
+def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict) -> Mesh:
     """:func:`mesh` itself."""
     t0 = time.perf_counter()
     surf = Surface.parse(surface, **params)
@@ -215,6 +223,14 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
     fixed = np.arange(curve_key0, curve_key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
+    t_improve = time.perf_counter()
+    improved = {}
+    if improve:
+        # Singular points have keys below 0 (centre vertices the smallest
+        # int64, and they move); curve and crease vertices the keys fixed.
+        singular_vertex = (vkeys < 0) & (vkeys != np.iinfo(np.int64).min)
+        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed))
+    t_improve = time.perf_counter() - t_improve
     # Where two axis skeletons meet (normal along an axis), for reference:
     # the mesh does not use them, so they are found when first asked for.
     node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
@@ -245,6 +261,8 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict) -> Mesh:
         # Distance (fine cells) of the two closest creases, where closer
         # than CREASE_MIN_GAP (then ``fine`` was raised for them), else None.
         "crease_gap": gap if np.isfinite(gap) else None,
+        "improve": improved,
+        "improve_time": t_improve,
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,

@@ -489,3 +489,45 @@ CREASE_CORNER = 1.5
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
+
+# ---------------------------------------------------------------------------
+# Triangle shape (singmesh.facets.improve, issue #12).
+# ---------------------------------------------------------------------------
+
+#: Rounds of (flips, relaxation) and the flip passes in each.  Three rounds
+#: bring the crossings' slivers to well-shaped triangles; more change
+#: little (sphere: min angle 6.4 -> ~30 degrees after three).
+IMPROVE_ROUNDS = 3
+IMPROVE_FLIP_PASSES = 4
+
+#: A vertex moves at most this fraction of its local edge length per
+#: relaxation step: Newton then starts close to the surface (the tangent
+#: plane is off it by ~ curvature x step^2) and cannot reach another sheet.
+IMPROVE_STEP = 0.5
+
+#: Newton steps after a move (quadratic convergence from a start within
+#: a fraction of an edge length of the surface: three reach rounding).
+IMPROVE_NEWTON = 3
+
+#: A moved vertex stays only if |F| / |grad F| there is below this
+#: fraction of the box (the mesh promises 1e-10: a 100-fold margin) ...
+IMPROVE_RESIDUAL = 1e-12
+
+#: ... if Newton moved it at most this fraction of its tangent step (more
+#: is not the curvature of its own sheet: a jump towards another one) ...
+IMPROVE_PROJECTION = 0.5
+
+#: ... and if its unit normal keeps a cosine above this with the old one
+#: (45 degrees: a step of half an edge turns it by far less on a sheet
+#: the mesh resolves; near a double curve the other sheet's is far off).
+IMPROVE_NORMAL_TURN = 0.7
+
+#: A triangle leans from the surface by the angle between its normal and
+#: the mean of its vertices' unit normals: a flip or a move may not make it
+#: lean more than the triangles it replaces or this (cosine, 25 degrees),
+#: whichever is larger.  Keeps the mesh as close to F = 0 as it was.
+IMPROVE_LEAN = 0.906
+
+#: Vertices at most this far (fraction of the box) from a face of the box
+#: lie on it (the crossings there are computed in that plane).
+IMPROVE_ON_BOX = 1e-12
