@@ -37,7 +37,7 @@ from singmesh import tolerances as tol
 
 
 def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarray,
-                 apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+                 apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     """Flip and relax the triangles of a mesh of ``surface`` into good shape.
 
     Parameters
@@ -58,36 +58,39 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
 
     Returns
     -------
-    vertices : (V, 3) float64, faces : (T, 3) int64, info : dict
-        The same vertices in the same order (moved on the surface), the
-        same number of triangles; ``info`` counts flips and moves.
+    vertices : (V, 3) float64
+        The same vertices in the same order, some moved on the surface.
+    faces : (T, 3) int64
+        As many triangles.
+    gradient : (V, 3) float64
+        grad F at the returned vertices.
+    info : dict
+        Counts of flips, moves and moves undone.
     """
     v = np.array(vertices, dtype=float)
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     info = {"flips": 0, "moves": 0, "undone": 0}
+    _, g = surface.value_gradient(v)
     if len(f) == 0:
-        return v, f, info
+        return v, f, g, info
     box = np.asarray(box, float)
     size = float(np.max(box[:, 1] - box[:, 0]))
-    _, g = surface.value_gradient(v)
     normal, gnorm = _unit(g)
     roles = _roles(v, f, box, size, apex, curve, gnorm)
-    noflip = apex
-    for _ in range(tol.IMPROVE_ROUNDS):
+    mesh = _Flipper(f, len(v), apex, curve)
+    for last in [False] * tol.IMPROVE_ROUNDS + [True]:
+        dirty = None
         for _ in range(tol.IMPROVE_FLIP_PASSES):
-            n = _flip_pass(v, f, normal, noflip, curve)
+            n, dirty = mesh.flip_pass(v, normal, dirty)
             info["flips"] += n
             if n == 0:
                 break
-        moved, undone = _relax(v, f, normal, roles, surface, box, size)
+        if last:
+            break
+        moved, undone = _relax(v, mesh.f, normal, g, roles, surface, box, size)
         info["moves"] += moved
         info["undone"] += undone
-    for _ in range(tol.IMPROVE_FLIP_PASSES):
-        n = _flip_pass(v, f, normal, noflip, curve)
-        info["flips"] += n
-        if n == 0:
-            break
-    return v, f, info
+    return v, mesh.f, g, info
 
 
 def _unit(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -143,84 +146,117 @@ def _roles(v, f, box, size, apex, curve, gnorm) -> _Roles:
     return _Roles(free, face, axis, ends)
 
 
-def _halfedges(f: np.ndarray, nv: int):
-    """The interior edges with two oppositely oriented triangles.
+class _Flipper:
+    """Triangles with their half-edge twins, flipped in independent sets.
 
-    Returns
-    -------
-    t1, t2 : (E,) the two triangles; a, b, c, d : (E,) vertices, the edge
-    a -> b in t1 = (a, b, c) and b -> a in t2 = (b, a, d) (up to rotation);
-    keys : sorted keys ``min * nv + max`` of all edges
+    Half-edge ``h = 3 t + i`` runs from ``f[t, i]`` to ``f[t, (i + 1) % 3]``;
+    ``twin[h]`` is the opposite half-edge of the triangle across, -1 on the
+    boundary, at non-manifold edges and where the two triangles disagree in
+    orientation (such edges are never flipped).
     """
-    u = f.ravel()
-    w = f[:, [1, 2, 0]].ravel()
-    o = f[:, [2, 0, 1]].ravel()
-    key = np.minimum(u, w) * nv + np.maximum(u, w)
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    m = len(ks)
-    start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
-    length = np.diff(np.r_[start, m])
-    two = start[length == 2]
-    h1, h2 = order[two], order[two + 1]
-    ok = u[h1] == w[h2]
-    h1, h2 = h1[ok], h2[ok]
-    return h1 // 3, h2 // 3, u[h1], w[h1], o[h1], o[h2], ks[start]
+
+    def __init__(self, f: np.ndarray, nv: int, apex: np.ndarray, curve: np.ndarray):
+        self.f, self.nv, self.apex, self.curve = f, nv, apex, curve
+        m = 3 * len(f)
+        h = np.arange(m)
+        self.next = h - h % 3 + (h % 3 + 1) % 3
+        self.prev = h - h % 3 + (h % 3 + 2) % 3
+        u = f.ravel()
+        w = u[self.next]
+        key = np.minimum(u, w) * nv + np.maximum(u, w)
+        order = np.argsort(key, kind="stable")
+        ks = key[order]
+        start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+        length = np.diff(np.r_[start, m])
+        two = start[length == 2]
+        h1, h2 = order[two], order[two + 1]
+        ok = u[h1] == w[h2]
+        self.twin = np.full(m, -1, np.int64)
+        self.twin[h1[ok]] = h2[ok]
+        self.twin[h2[ok]] = h1[ok]
+        #: Sorted keys ``min * nv + max`` of all edges.
+        self.keys = ks[start]
+
+    def flip_pass(self, v, normal, dirty):
+        """One pass of flips among the edges of triangles ``dirty`` (all if None).
+
+        Returns the number of flips and the triangles to look at next.
+        """
+        f, nv, twin = self.f, self.nv, self.twin
+        fl = f.ravel()
+        if dirty is None:
+            h = np.flatnonzero(twin > np.arange(len(twin)))
+        else:
+            h = (3 * dirty[:, None] + np.arange(3)).ravel()
+            h = np.unique(np.minimum(h, np.where(twin[h] >= 0, twin[h], h))[twin[h] >= 0])
+        h2 = twin[h]
+        a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
+        apex, curve = self.apex, self.curve
+        ok = (c != d) & ~apex[a] & ~apex[b] & ~apex[c] & ~apex[d]
+        ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
+        h, h2, a, b, c, d = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok]
+        pa, pb, pc, pd = v[a], v[b], v[c], v[d]
+        # Locally Delaunay unless the angles at c and d sum over 180
+        # degrees: sin(gamma + delta) < 0.
+        ca, cb, da, db = pa - pc, pb - pc, pa - pd, pb - pd
+        lca, lcb, lda, ldb = _norm(ca), _norm(cb), _norm(da), _norm(db)
+        want = _dot(ca, cb) * _norm(_cross(da, db)) + _dot(da, db) * _norm(_cross(ca, cb)) \
+            < -1e-9 * lca * lcb * lda * ldb
+        h, h2, a, b, c, d = h[want], h2[want], a[want], b[want], c[want], d[want]
+        pa, pb, pc, pd = v[a], v[b], v[c], v[d]
+        # The new edge c-d must not exist already.
+        new = np.minimum(c, d) * nv + np.maximum(c, d)
+        keys = self.keys
+        ok = keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        # The smallest of the six angles (largest cosine) must grow.
+        old = np.maximum(_max_cos(pa, pb, pc), _max_cos(pb, pa, pd))
+        cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
+        ok &= cos_new < old - 1e-12
+        # No fold, no zero area, no more lean from the surface than before.
+        na, nb, nc, nd = normal[a], normal[b], normal[c], normal[d]
+        lean_old = np.minimum(_lean(pa, pb, pc, na + nb + nc), _lean(pb, pa, pd, nb + na + nd))
+        lean_new = np.minimum(_lean(pa, pd, pc, na + nd + nc), _lean(pb, pc, pd, nb + nc + nd))
+        ok &= (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
+        h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
+        if len(h) == 0:
+            return 0, np.zeros(0, np.int64)
+        t1, t2 = h // 3, h2 // 3
+        gain = old[ok] - cos_new[ok]
+        # An independent set: each triangle goes to its best flip; a flip is
+        # done when it is the best of both its triangles, and of the flips
+        # making the same new edge.
+        rank = np.empty(len(gain), np.int64)
+        rank[np.argsort(-gain, kind="stable")] = np.arange(len(gain))
+        best = np.full(len(f), len(gain), np.int64)
+        np.minimum.at(best, t1, rank)
+        np.minimum.at(best, t2, rank)
+        take = np.flatnonzero((best[t1] == rank) & (best[t2] == rank))
+        take = take[np.argsort(rank[take], kind="stable")]
+        _, first = np.unique(new[take], return_index=True)
+        take = np.sort(take[first])
+        later = np.setdiff1d(np.arange(len(h)), take)
+        dirty = np.unique(np.concatenate([t1[take], t2[take], t1[later], t2[later]]))
+        h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
+        # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
+        # b->c, c->a, a->d, d->b move to their places in them.
+        n1, p1, n2, p2 = self.next[h], self.prev[h], self.next[h2], self.prev[h2]
+        remap = np.arange(len(twin))
+        remap[n1], remap[p1], remap[n2], remap[p2] = 3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2
+        out = np.where(twin >= 0, remap[np.maximum(twin, 0)], -1)
+        moving = [out[n1], out[p1], out[n2], out[p2]]
+        out[remap[n1]], out[remap[p1]], out[remap[n2]], out[remap[p2]] = moving
+        out[3 * t1 + 1], out[3 * t2 + 1] = 3 * t2 + 1, 3 * t1 + 1
+        self.twin = out
+        f[t1] = np.stack([a, d, c], axis=1)
+        f[t2] = np.stack([b, c, d], axis=1)
+        gone = np.minimum(a, b) * nv + np.maximum(a, b)
+        self.keys = np.sort(np.concatenate([np.delete(keys, np.searchsorted(keys, gone)), new]))
+        return len(h), dirty
 
 
-def _flip_pass(v, f, normal, noflip, curve) -> int:
-    """One pass of flips (in place on ``f``): returns how many."""
-    nv = len(v)
-    t1, t2, a, b, c, d, keys = _halfedges(f, nv)
-    ok = (c != d) & ~noflip[a] & ~noflip[b] & ~noflip[c] & ~noflip[d]
-    ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
-    t1, t2, a, b, c, d = t1[ok], t2[ok], a[ok], b[ok], c[ok], d[ok]
-    pa, pb, pc, pd = v[a], v[b], v[c], v[d]
-    # Locally Delaunay unless the angles at c and d sum over 180 degrees:
-    # sin(gamma + delta) < 0.
-    ca, cb, da, db = pa - pc, pb - pc, pa - pd, pb - pd
-    dot_c, dot_d = _dot(ca, cb), _dot(da, db)
-    cr_c, cr_d = _norm(np.cross(ca, cb)), _norm(np.cross(da, db))
-    scale = _norm(ca) * _norm(cb) * _norm(da) * _norm(db)
-    want = dot_c * cr_d + dot_d * cr_c < -1e-9 * scale
-    if not want.any():
-        return 0
-    t1, t2, a, b, c, d = t1[want], t2[want], a[want], b[want], c[want], d[want]
-    pa, pb, pc, pd = v[a], v[b], v[c], v[d]
-    # The new edge c-d must not exist already.
-    new = np.minimum(c, d) * nv + np.maximum(c, d)
-    pos = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
-    ok = keys[pos] != new
-    # Smallest angle (largest cosine) of the two old and the two new triangles.
-    old = np.maximum(_max_cos(pa, pb, pc), _max_cos(pb, pa, pd))
-    cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
-    ok &= cos_new < old - 1e-12
-    # No fold, no zero area, no more lean from the surface than before.
-    lean_old = np.minimum(_lean(pa, pb, pc, normal[a] + normal[b] + normal[c]),
-                          _lean(pb, pa, pd, normal[b] + normal[a] + normal[d]))
-    lean_new = np.minimum(_lean(pa, pd, pc, normal[a] + normal[d] + normal[c]),
-                          _lean(pb, pc, pd, normal[b] + normal[c] + normal[d]))
-    ok &= (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
-    if not ok.any():
-        return 0
-    t1, t2, a, b, c, d, new = t1[ok], t2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
-    gain = old[ok] - cos_new[ok]
-    # An independent set: each triangle goes to its best flip; a flip is
-    # done when it is the best of both its triangles.
-    rank = np.empty(len(gain), np.int64)
-    rank[np.argsort(-gain, kind="stable")] = np.arange(len(gain))
-    best = np.full(len(f), len(gain), np.int64)
-    np.minimum.at(best, t1, rank)
-    np.minimum.at(best, t2, rank)
-    take = (best[t1] == rank) & (best[t2] == rank)
-    # Two flips making the same new edge: the better one only.
-    idx = np.flatnonzero(take)
-    idx = idx[np.argsort(rank[idx], kind="stable")]
-    _, first = np.unique(new[idx], return_index=True)
-    idx = idx[first]
-    f[t1[idx]] = np.stack([a[idx], d[idx], c[idx]], axis=1)
-    f[t2[idx]] = np.stack([b[idx], c[idx], d[idx]], axis=1)
-    return len(idx)
+def _cross(a, b):
+    """Row-wise cross product (np.cross costs more for short rows)."""
+    return a[:, [1, 2, 0]] * b[:, [2, 0, 1]] - a[:, [2, 0, 1]] * b[:, [1, 2, 0]]
 
 
 def _dot(a, b):
@@ -244,7 +280,7 @@ def _max_cos(p, q, r):
 
 def _lean(p, q, r, ref):
     """Cosine between the normal of triangles (p, q, r) and ``ref``; -1 for no area."""
-    n = np.cross(q - p, r - p)
+    n = _cross(q - p, r - p)
     ln = _norm(n)
     lr = _norm(ref)
     longest = np.maximum(np.maximum(_dot(q - p, q - p), _dot(r - q, r - q)), _dot(p - r, p - r))
@@ -252,11 +288,11 @@ def _lean(p, q, r, ref):
     return np.where(ln > tol.ZERO_AREA * longest, c, -1.0)
 
 
-def _relax(v, f, normal, roles: _Roles, surface, box, size) -> tuple[int, int]:
-    """One relaxation step (in place on ``v`` and ``normal``): returns (moved, undone)."""
+def _relax(v, f, normal, grad, roles: _Roles, surface, box, size) -> tuple[int, int]:
+    """One relaxation step (in place on ``v``, ``normal`` and ``grad``): returns (moved, undone)."""
     nv = len(v)
     p = v[f]
-    cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    cross = _cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     area = _norm(cross)
     flat = f.ravel()
     w = np.repeat(area, 3)
@@ -267,8 +303,15 @@ def _relax(v, f, normal, roles: _Roles, surface, box, size) -> tuple[int, int]:
                        for k in range(3)], axis=1) / np.maximum(total, 1e-300)[:, None]
     # Local edge length: the side of an equilateral triangle of the mean area.
     h = np.sqrt(2.0 / np.sqrt(3.0) * total / np.maximum(count, 1))
-    idx_free = np.flatnonzero(roles.free & (total > 0))
-    idx_face = np.flatnonzero(roles.face)
+    # Only vertices near a triangle with a small angle move: the rest are
+    # well placed already, and Newton costs per point.
+    small = _max_cos(p[:, 0], p[:, 1], p[:, 2]) > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
+    near = np.zeros(nv, bool)
+    near[f[small].ravel()] = True
+    active = np.zeros(nv, bool)
+    active[f[near[f].any(axis=1)].ravel()] = True
+    idx_free = np.flatnonzero(roles.free & active & (total > 0))
+    idx_face = np.flatnonzero(roles.face & active)
     step_free = target[idx_free] - v[idx_free]
     nf = normal[idx_free]
     step_free -= _dot(step_free, nf)[:, None] * nf
@@ -278,7 +321,7 @@ def _relax(v, f, normal, roles: _Roles, surface, box, size) -> tuple[int, int]:
     step_face = 0.5 * (v[ends[:, 0]] + v[ends[:, 1]]) - v[idx_face]
     ax = np.zeros((len(idx_face), 3))
     ax[np.arange(len(idx_face)), roles.axis[idx_face]] = 1.0
-    tangent, _ = _unit(np.cross(ax, normal[idx_face]))
+    tangent, _ = _unit(_cross(ax, normal[idx_face]))
     step_face = _dot(step_face, tangent)[:, None] * tangent
     idx = np.concatenate([idx_free, idx_face])
     step = np.concatenate([step_free, step_face])
@@ -304,11 +347,12 @@ def _relax(v, f, normal, roles: _Roles, surface, box, size) -> tuple[int, int]:
     inside = (q >= box[:, 0] + margin) & (q <= box[:, 1] - margin)
     ok &= (inside | ~free_axes).all(axis=1)
     rejected = int((~ok).sum())
-    idx, q, new_normal = idx[ok], q[ok], new_normal[ok]
+    idx, q, new_normal, g = idx[ok], q[ok], new_normal[ok], g[ok]
     # Folds and lean: undo the moves of vertices of triangles that got worse.
-    old_v, old_n = v.copy(), normal.copy()
+    old_v, old_n, old_g = v.copy(), normal.copy(), grad.copy()
     v[idx] = q
     normal[idx] = new_normal
+    grad[idx] = g
     moved = np.zeros(nv, bool)
     moved[idx] = True
     touched = np.flatnonzero(moved[f].any(axis=1))
@@ -326,12 +370,14 @@ def _relax(v, f, normal, roles: _Roles, surface, box, size) -> tuple[int, int]:
         back = np.unique(back)
         v[back] = old_v[back]
         normal[back] = old_n[back]
+        grad[back] = old_g[back]
         moved[back] = False
         undone += len(back)
     else:
         # Still not settled: undo every move of this step.
         v[:] = old_v
         normal[:] = old_n
+        grad[:] = old_g
         return 0, rejected + int(moved.sum()) + undone
     return int(moved.sum()), rejected + undone
 

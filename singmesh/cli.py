@@ -1,7 +1,7 @@
 """The ``singmesh`` command line.
 
-``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N] [a=1 ...]``
-meshes, writes and prints the report (``--defs FILE --name NAME`` instead of
+``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N] [--no-improve] [a=1 ...]``
+meshes, writes and prints the report (with the triangles' angles) (``--defs FILE --name NAME`` instead of
 the equation meshes a definition of a SingSurf file on its own box);
 ``singmesh defs FILE`` lists such a file; ``singmesh classify "EQUATION" --at X Y Z``
 names a singular point; ``singmesh gallery ...`` builds the gallery.  Bad
@@ -47,6 +47,9 @@ def _mesh_command(argv: list[str]) -> int:
                    help="boxes per axis of the uniform subdivision (power of two; default 32)")
     p.add_argument("--fine", type=int, default=256,
                    help="boxes per axis at the deepest refinement (power of two; default 256)")
+    p.add_argument("--no-improve", action="store_true",
+                   help="keep the triangles as the boxes make them (vertices at the lattice crossings; "
+                        "by default flips and moves on the surface make them well-shaped)")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     args = p.parse_args(argv)
@@ -65,7 +68,8 @@ def _mesh_command(argv: list[str]) -> int:
         surface = args.args[0]
         params = _params(args.args[1:])
         box = box or DEFAULT_BOX
-    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, **({} if args.defs else params))
+    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, improve=not args.no_improve,
+             **({} if args.defs else params))
     print(m.report_text())
     if args.output:
         try:

@@ -500,6 +500,10 @@ CREASE_BOX_JOIN = 12.0
 IMPROVE_ROUNDS = 3
 IMPROVE_FLIP_PASSES = 4
 
+#: Relaxation moves the vertices of triangles with an angle below this
+#: (degrees) and their neighbours; the others are well placed already.
+IMPROVE_ACTIVE_ANGLE = 35.0
+
 #: A vertex moves at most this fraction of its local edge length per
 #: relaxation step: Newton then starts close to the surface (the tangent
 #: plane is off it by ~ curvature x step^2) and cannot reach another sheet.
