@@ -35,6 +35,11 @@ import numpy as np
 
 from singmesh import tolerances as tol
 
+# Coordinates are kept as (3, n) arrays (one row per axis): gathers and
+# products of rows cost a third of those of (n, 3) rows for the few
+# thousand points of a mesh, and this stage must cost little next to the
+# meshing itself.
+
 
 def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarray,
                  apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
@@ -67,7 +72,7 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
     info : dict
         Counts of flips, moves and moves undone.
     """
-    v = np.array(vertices, dtype=float)
+    v = np.array(vertices, dtype=float).reshape(-1, 3)
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     info = {"flips": 0, "moves": 0, "undone": 0}
     _, g = surface.value_gradient(v)
@@ -75,88 +80,76 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         return v, f, g, info
     box = np.asarray(box, float)
     size = float(np.max(box[:, 1] - box[:, 0]))
-    normal, gnorm = _unit(g)
-    roles = _roles(v, f, box, size, apex, curve, gnorm)
-    mesh = _Flipper(f, len(v), apex, curve)
+    state = _State(v, f, g, np.asarray(apex, bool), np.asarray(curve, bool), box, size)
     for last in [False] * tol.IMPROVE_ROUNDS + [True]:
         dirty = None
         for _ in range(tol.IMPROVE_FLIP_PASSES):
-            n, dirty = mesh.flip_pass(v, normal, dirty)
+            n, dirty = state.flip_pass(dirty)
             info["flips"] += n
             if n == 0:
                 break
         if last:
             break
-        moved, undone = _relax(v, mesh.f, normal, g, roles, surface, box, size)
+        moved, undone = state.relax(surface)
         info["moves"] += moved
         info["undone"] += undone
-    return v, mesh.f, g, info
+    return state.p.T.copy(), state.f, state.g.T.copy(), info
 
 
-def _unit(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rows of ``a`` scaled to unit length (zero where the length is 0 or not finite), and the lengths."""
-    n = np.sqrt(np.einsum("ij,ij->i", a, a))
+def _cross(a, b):
+    """Cross products of the columns of (3, n) arrays."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _dot(a, b):
+    """Dot products of the columns of (3, n) arrays."""
+    return np.einsum("ij,ij->j", a, b)
+
+
+def _unit(a):
+    """Columns of a (3, n) array scaled to unit length (zero where 0 or not finite), and the lengths."""
+    n = np.sqrt(_dot(a, a))
     ok = (n > 0) & np.isfinite(n)
-    return np.where(ok[:, None], a / np.where(ok, n, 1.0)[:, None], 0.0), np.where(ok, n, 0.0)
+    return np.where(ok, a / np.where(ok, n, 1.0), 0.0), np.where(ok, n, 0.0)
 
 
-class _Roles:
-    """What each vertex may do: ``free`` (move in its tangent plane), ``face`` (move in its box face
-    along the boundary, with ``axis`` the face's axis and ``ends`` its two boundary neighbours)."""
-
-    def __init__(self, free, face, axis, ends):
-        self.free, self.face, self.axis, self.ends = free, face, axis, ends
-
-
-def _roles(v, f, box, size, apex, curve, gnorm) -> _Roles:
-    """Which vertices move, and how: see :class:`_Roles`."""
-    nv = len(v)
-    on = (np.abs(v[:, :, None] - box[None, :, :]) <= tol.IMPROVE_ON_BOX * size).any(axis=2)  # (V, 3)
-    faces_on = on.sum(axis=1)
-    e = np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    key = e[:, 0] * nv + e[:, 1]
-    uniq, counts = np.unique(key, return_counts=True)
-    a, b = uniq // nv, uniq % nv
-    stay = apex | curve | (faces_on >= 2) | (gnorm <= 0)
-    # grad F vanishing or not finite: no tangent plane.
-    stay |= gnorm < 1e-8 * np.median(gnorm[gnorm > 0]) if (gnorm > 0).any() else True
-    odd = counts > 2
-    border = counts == 1
-    # A boundary edge must lie in one face of the box; the others (and
-    # non-manifold edges) keep their vertices.
-    same_face = (on[a] & on[b] & (np.abs(v[a] - v[b]) <= tol.IMPROVE_ON_BOX * size)).any(axis=1)
-    bad = odd | (border & ~same_face)
-    stay[a[bad]] = True
-    stay[b[bad]] = True
-    # Vertices on one box face: exactly two boundary neighbours to slide between.
-    ba, bb = a[border & ~bad], b[border & ~bad]
-    nb = np.bincount(np.concatenate([ba, bb]), minlength=nv)
-    face = (faces_on == 1) & ~stay & (nb == 2)
-    stay |= (faces_on == 1) & ~face
-    ends = np.full((nv, 2), -1, np.int64)
-    src = np.concatenate([ba, bb])
-    dst = np.concatenate([bb, ba])
-    order = np.argsort(src, kind="stable")
-    src, dst = src[order], dst[order]
-    first = np.r_[True, src[1:] != src[:-1]] if len(src) else np.zeros(0, bool)
-    ends[src[first], 0] = dst[first]
-    ends[src[~first], 1] = dst[~first]
-    axis = np.argmax(on, axis=1)
-    free = ~stay & ~face
-    return _Roles(free, face, axis, ends)
+def _max_cos(p, q, r):
+    """Largest cosine of the angles of triangles (p, q, r), (3, n) each: the smallest angle's."""
+    u, w, x = q - p, r - q, p - r
+    lu, lw, lx = _dot(u, u), _dot(w, w), _dot(x, x)
+    c0 = -_dot(x, u) / np.sqrt(np.maximum(lx * lu, 1e-300))
+    c1 = -_dot(u, w) / np.sqrt(np.maximum(lu * lw, 1e-300))
+    c2 = -_dot(w, x) / np.sqrt(np.maximum(lw * lx, 1e-300))
+    return np.maximum(np.maximum(c0, c1), c2)
 
 
-class _Flipper:
-    """Triangles with their half-edge twins, flipped in independent sets.
+def _lean(p, q, r, ref):
+    """Cosine between the normals of triangles (p, q, r) and ``ref``; -1 where no area."""
+    n = _cross(q - p, r - p)
+    ln = _dot(n, n)
+    longest = np.maximum(np.maximum(_dot(q - p, q - p), _dot(r - q, r - q)), _dot(p - r, p - r))
+    c = _dot(n, ref) / np.sqrt(np.maximum(ln * _dot(ref, ref), 1e-300))
+    return np.where(np.sqrt(ln) > tol.ZERO_AREA * longest, c, -1.0)
+
+
+class _State:
+    """The mesh being shaped: positions, normals, triangles, half-edge twins and vertex roles.
 
     Half-edge ``h = 3 t + i`` runs from ``f[t, i]`` to ``f[t, (i + 1) % 3]``;
-    ``twin[h]`` is the opposite half-edge of the triangle across, -1 on the
+    ``twin[h]`` is the opposite half-edge in the triangle across, -1 on the
     boundary, at non-manifold edges and where the two triangles disagree in
     orientation (such edges are never flipped).
+
+    Roles: ``free`` vertices move in their tangent plane; ``face`` vertices
+    (on one face of the box, axis ``axis``) move along the boundary between
+    their two boundary neighbours ``ends``; the others stay.
     """
 
-    def __init__(self, f: np.ndarray, nv: int, apex: np.ndarray, curve: np.ndarray):
-        self.f, self.nv, self.apex, self.curve = f, nv, apex, curve
+    def __init__(self, v, f, g, apex, curve, box, size):
+        nv = len(v)
+        self.p, self.g = np.ascontiguousarray(v.T), np.ascontiguousarray(g.T)
+        self.n, gnorm = _unit(self.g)
+        self.f, self.nv, self.apex, self.curve, self.box, self.size = f, nv, apex, curve, box, size
         m = 3 * len(f)
         h = np.arange(m)
         self.next = h - h % 3 + (h % 3 + 1) % 3
@@ -176,8 +169,64 @@ class _Flipper:
         self.twin[h2[ok]] = h1[ok]
         #: Sorted keys ``min * nv + max`` of all edges.
         self.keys = ks[start]
+        self._roles(self.keys // nv, self.keys % nv, length, gnorm)
+        self._faces()
 
-    def flip_pass(self, v, normal, dirty):
+    # ------------------------------------------------------------ roles
+    def _roles(self, a, b, counts, gnorm):
+        v, box, size, nv = self.p, self.box, self.size, self.nv
+        eps = tol.IMPROVE_ON_BOX * size
+        on = (np.abs(v - box[:, :1]) <= eps) | (np.abs(v - box[:, 1:]) <= eps)  # (3, V)
+        faces_on = on.sum(axis=0)
+        stay = self.apex | self.curve | (faces_on >= 2)
+        # No tangent plane where grad F vanishes or is not finite.
+        ok = gnorm > 0
+        stay |= ~ok | (gnorm < 1e-8 * np.median(gnorm[ok])) if ok.any() else True
+        border = counts == 1
+        # A boundary edge must lie in one face of the box; the others (and
+        # non-manifold edges) keep their vertices.
+        same_face = (on[:, a] & on[:, b] & (np.abs(v[:, a] - v[:, b]) <= eps)).any(axis=0)
+        bad = (counts > 2) | (border & ~same_face)
+        stay[a[bad]] = True
+        stay[b[bad]] = True
+        # On one box face with exactly two boundary neighbours: slides between them.
+        src = np.concatenate([a[border & ~bad], b[border & ~bad]])
+        dst = np.concatenate([b[border & ~bad], a[border & ~bad]])
+        nb = np.bincount(src, minlength=nv)
+        face = (faces_on == 1) & ~stay & (nb == 2)
+        stay |= faces_on == 1
+        order = np.argsort(src, kind="stable")
+        src, dst = src[order], dst[order]
+        first = np.r_[True, src[1:] != src[:-1]] if len(src) else np.zeros(0, bool)
+        self.ends = np.full((2, nv), -1, np.int64)
+        self.ends[0, src[first]] = dst[first]
+        self.ends[1, src[~first]] = dst[~first]
+        self.axis = np.argmax(on, axis=0)
+        self.free = ~stay
+        self.face = face
+
+    # ------------------------------------------------------------ per triangle
+    def _faces(self, which=None):
+        """Per triangle: cotangents at the corners, largest cosine, doubled area, centroid (all or ``which``)."""
+        f = self.f if which is None else self.f[which]
+        q0, q1, q2 = (np.take(self.p, f[:, i], axis=1) for i in range(3))
+        e0, e1, e2 = q1 - q0, q2 - q1, q0 - q2
+        l0, l1, l2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)
+        d0, d1, d2 = -_dot(e0, e2), -_dot(e0, e1), -_dot(e1, e2)
+        area2 = np.sqrt(_dot(*(2 * [_cross(e0, -e2)])))
+        a = np.maximum(area2, 1e-300)
+        cot = np.stack([d0 / a, d1 / a, d2 / a], axis=1)
+        big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
+                                    d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
+                         d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
+        centre = (q0 + q1 + q2) / 3.0
+        if which is None:
+            self.cot, self.big, self.area2, self.centre = cot, big, area2, centre
+        else:
+            self.cot[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
+
+    # ------------------------------------------------------------ flips
+    def flip_pass(self, dirty):
         """One pass of flips among the edges of triangles ``dirty`` (all if None).
 
         Returns the number of flips and the triangles to look at next.
@@ -188,39 +237,37 @@ class _Flipper:
             h = np.flatnonzero(twin > np.arange(len(twin)))
         else:
             h = (3 * dirty[:, None] + np.arange(3)).ravel()
-            h = np.unique(np.minimum(h, np.where(twin[h] >= 0, twin[h], h))[twin[h] >= 0])
+            t = twin[h]
+            h = np.unique(np.minimum(h, t)[t >= 0])
         h2 = twin[h]
+        # Locally Delaunay unless the angles opposite the edge sum over 180
+        # degrees: cot(gamma) + cot(delta) < 0.
+        cot_opp = self.cot[:, [2, 0, 1]].ravel()
+        want = cot_opp[h] + cot_opp[h2] < -1e-9
+        h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
         apex, curve = self.apex, self.curve
         ok = (c != d) & ~apex[a] & ~apex[b] & ~apex[c] & ~apex[d]
         ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
-        h, h2, a, b, c, d = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok]
-        pa, pb, pc, pd = v[a], v[b], v[c], v[d]
-        # Locally Delaunay unless the angles at c and d sum over 180
-        # degrees: sin(gamma + delta) < 0.
-        ca, cb, da, db = pa - pc, pb - pc, pa - pd, pb - pd
-        lca, lcb, lda, ldb = _norm(ca), _norm(cb), _norm(da), _norm(db)
-        want = _dot(ca, cb) * _norm(_cross(da, db)) + _dot(da, db) * _norm(_cross(ca, cb)) \
-            < -1e-9 * lca * lcb * lda * ldb
-        h, h2, a, b, c, d = h[want], h2[want], a[want], b[want], c[want], d[want]
-        pa, pb, pc, pd = v[a], v[b], v[c], v[d]
         # The new edge c-d must not exist already.
         new = np.minimum(c, d) * nv + np.maximum(c, d)
         keys = self.keys
-        ok = keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        ok &= keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
+        t1, t2 = h // 3, h2 // 3
+        P, N = self.p, self.n
+        pa, pb, pc, pd = (np.take(P, x, axis=1) for x in (a, b, c, d))
         # The smallest of the six angles (largest cosine) must grow.
-        old = np.maximum(_max_cos(pa, pb, pc), _max_cos(pb, pa, pd))
+        old = np.maximum(self.big[t1], self.big[t2])
         cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
-        ok &= cos_new < old - 1e-12
         # No fold, no zero area, no more lean from the surface than before.
-        na, nb, nc, nd = normal[a], normal[b], normal[c], normal[d]
+        na, nb, nc, nd = (np.take(N, x, axis=1) for x in (a, b, c, d))
         lean_old = np.minimum(_lean(pa, pb, pc, na + nb + nc), _lean(pb, pa, pd, nb + na + nd))
         lean_new = np.minimum(_lean(pa, pd, pc, na + nd + nc), _lean(pb, pc, pd, nb + nc + nd))
-        ok &= (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
-        h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
-        if len(h) == 0:
+        ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
+        if not ok.any():
             return 0, np.zeros(0, np.int64)
-        t1, t2 = h // 3, h2 // 3
+        h, h2, a, b, c, d, new, t1, t2 = (x[ok] for x in (h, h2, a, b, c, d, new, t1, t2))
         gain = old[ok] - cos_new[ok]
         # An independent set: each triangle goes to its best flip; a flip is
         # done when it is the best of both its triangles, and of the flips
@@ -234,8 +281,9 @@ class _Flipper:
         take = take[np.argsort(rank[take], kind="stable")]
         _, first = np.unique(new[take], return_index=True)
         take = np.sort(take[first])
-        later = np.setdiff1d(np.arange(len(h)), take)
-        dirty = np.unique(np.concatenate([t1[take], t2[take], t1[later], t2[later]]))
+        later = np.ones(len(h), bool)
+        later[take] = False
+        dirty = np.unique(np.concatenate([t1[later], t2[later], t1[take], t2[take]]))
         h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
         # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
         # b->c, c->a, a->d, d->b move to their places in them.
@@ -251,146 +299,114 @@ class _Flipper:
         f[t2] = np.stack([b, c, d], axis=1)
         gone = np.minimum(a, b) * nv + np.maximum(a, b)
         self.keys = np.sort(np.concatenate([np.delete(keys, np.searchsorted(keys, gone)), new]))
+        self._faces(np.concatenate([t1, t2]))
         return len(h), dirty
 
-
-def _cross(a, b):
-    """Row-wise cross product (np.cross costs more for short rows)."""
-    return a[:, [1, 2, 0]] * b[:, [2, 0, 1]] - a[:, [2, 0, 1]] * b[:, [1, 2, 0]]
-
-
-def _dot(a, b):
-    return np.einsum("ij,ij->i", a, b)
-
-
-def _norm(a):
-    return np.sqrt(np.einsum("ij,ij->i", a, a))
-
-
-def _max_cos(p, q, r):
-    """Largest cosine of the three angles of triangles (p, q, r): the smallest angle's."""
-    u, w, x = q - p, r - q, p - r
-    lu, lw, lx = _norm(u), _norm(w), _norm(x)
-    tiny = 1e-300
-    c0 = -_dot(x, u) / np.maximum(lx * lu, tiny)
-    c1 = -_dot(u, w) / np.maximum(lu * lw, tiny)
-    c2 = -_dot(w, x) / np.maximum(lw * lx, tiny)
-    return np.maximum(np.maximum(c0, c1), c2)
-
-
-def _lean(p, q, r, ref):
-    """Cosine between the normal of triangles (p, q, r) and ``ref``; -1 for no area."""
-    n = _cross(q - p, r - p)
-    ln = _norm(n)
-    lr = _norm(ref)
-    longest = np.maximum(np.maximum(_dot(q - p, q - p), _dot(r - q, r - q)), _dot(p - r, p - r))
-    c = _dot(n, ref) / np.maximum(ln * lr, 1e-300)
-    return np.where(ln > tol.ZERO_AREA * longest, c, -1.0)
-
-
-def _relax(v, f, normal, grad, roles: _Roles, surface, box, size) -> tuple[int, int]:
-    """One relaxation step (in place on ``v``, ``normal`` and ``grad``): returns (moved, undone)."""
-    nv = len(v)
-    p = v[f]
-    cross = _cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    area = _norm(cross)
-    flat = f.ravel()
-    w = np.repeat(area, 3)
-    total = np.bincount(flat, weights=w, minlength=nv)
-    count = np.bincount(flat, minlength=nv)
-    centre = p.mean(axis=1)
-    target = np.stack([np.bincount(flat, weights=w * np.repeat(centre[:, k], 3), minlength=nv)
-                       for k in range(3)], axis=1) / np.maximum(total, 1e-300)[:, None]
-    # Local edge length: the side of an equilateral triangle of the mean area.
-    h = np.sqrt(2.0 / np.sqrt(3.0) * total / np.maximum(count, 1))
-    # Only vertices near a triangle with a small angle move: the rest are
-    # well placed already, and Newton costs per point.
-    small = _max_cos(p[:, 0], p[:, 1], p[:, 2]) > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
-    near = np.zeros(nv, bool)
-    near[f[small].ravel()] = True
-    active = np.zeros(nv, bool)
-    active[f[near[f].any(axis=1)].ravel()] = True
-    idx_free = np.flatnonzero(roles.free & active & (total > 0))
-    idx_face = np.flatnonzero(roles.face & active)
-    step_free = target[idx_free] - v[idx_free]
-    nf = normal[idx_free]
-    step_free -= _dot(step_free, nf)[:, None] * nf
-    # On a box face: to the middle of the two boundary neighbours, along
-    # the boundary curve (tangent = face normal x grad F).
-    ends = roles.ends[idx_face]
-    step_face = 0.5 * (v[ends[:, 0]] + v[ends[:, 1]]) - v[idx_face]
-    ax = np.zeros((len(idx_face), 3))
-    ax[np.arange(len(idx_face)), roles.axis[idx_face]] = 1.0
-    tangent, _ = _unit(_cross(ax, normal[idx_face]))
-    step_face = _dot(step_face, tangent)[:, None] * tangent
-    idx = np.concatenate([idx_free, idx_face])
-    step = np.concatenate([step_free, step_face])
-    length = _norm(step)
-    limit = tol.IMPROVE_STEP * h[idx]
-    step *= np.minimum(1.0, limit / np.maximum(length, 1e-300))[:, None]
-    length = np.minimum(length, limit)
-    go = length > 1e-6 * h[idx]
-    idx, step, length = idx[go], step[go], length[go]
-    if len(idx) == 0:
-        return 0, 0
-    free_axes = np.ones((len(idx), 3), bool)
-    nfree = int(go[:len(idx_free)].sum())
-    free_axes[np.arange(nfree, len(idx)), roles.axis[idx[nfree:]]] = False
-    start = v[idx] + step
-    q, g, res = _newton(surface, start, free_axes)
-    new_normal, _ = _unit(g)
-    ok = np.isfinite(q).all(axis=1) & (res <= tol.IMPROVE_RESIDUAL * size)
-    ok &= _norm(q - start) <= tol.IMPROVE_PROJECTION * length + tol.IMPROVE_RESIDUAL * size
-    ok &= _dot(new_normal, normal[idx]) >= tol.IMPROVE_NORMAL_TURN
-    # Inside the box (a free vertex off its faces, a face vertex within its face).
-    margin = 1e-9 * size
-    inside = (q >= box[:, 0] + margin) & (q <= box[:, 1] - margin)
-    ok &= (inside | ~free_axes).all(axis=1)
-    rejected = int((~ok).sum())
-    idx, q, new_normal, g = idx[ok], q[ok], new_normal[ok], g[ok]
-    # Folds and lean: undo the moves of vertices of triangles that got worse.
-    old_v, old_n, old_g = v.copy(), normal.copy(), grad.copy()
-    v[idx] = q
-    normal[idx] = new_normal
-    grad[idx] = g
-    moved = np.zeros(nv, bool)
-    moved[idx] = True
-    touched = np.flatnonzero(moved[f].any(axis=1))
-    ft = f[touched]
-    lean_old = _lean(old_v[ft[:, 0]], old_v[ft[:, 1]], old_v[ft[:, 2]], old_n[ft].sum(axis=1))
-    bound = np.minimum(lean_old, tol.IMPROVE_LEAN)
-    undone = 0
-    for _ in range(8):
-        lean_new = _lean(v[ft[:, 0]], v[ft[:, 1]], v[ft[:, 2]], normal[ft].sum(axis=1))
-        bad = (lean_new < bound) | (lean_new <= 0)
-        back = ft[bad].ravel()
-        back = back[moved[back]]
-        if len(back) == 0:
-            break
-        back = np.unique(back)
-        v[back] = old_v[back]
-        normal[back] = old_n[back]
-        grad[back] = old_g[back]
-        moved[back] = False
-        undone += len(back)
-    else:
-        # Still not settled: undo every move of this step.
-        v[:] = old_v
-        normal[:] = old_n
-        grad[:] = old_g
-        return 0, rejected + int(moved.sum()) + undone
-    return int(moved.sum()), rejected + undone
+    # ------------------------------------------------------------ relaxation
+    def relax(self, surface) -> tuple[int, int]:
+        """One relaxation step: returns (moved, undone)."""
+        nv, f, P, N = self.nv, self.f, self.p, self.n
+        flat = f.ravel()
+        w = np.repeat(self.area2, 3)
+        total = np.bincount(flat, weights=w, minlength=nv)
+        wc = self.area2 * self.centre
+        # Only vertices near a triangle with a small angle move: the rest
+        # are well placed already, and Newton costs per point.
+        small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
+        near = np.zeros(nv, bool)
+        near[f[small].ravel()] = True
+        active = np.zeros(nv, bool)
+        active[f[near[f].any(axis=1)].ravel()] = True
+        idx_free = np.flatnonzero(self.free & active & (total > 0))
+        idx_face = np.flatnonzero(self.face & active)
+        # Local edge length: the side of an equilateral triangle of the mean area.
+        count = np.bincount(flat, minlength=nv)
+        h = np.sqrt(2.0 / np.sqrt(3.0) * total / np.maximum(count, 1))
+        # Free vertices: towards the area-weighted mean of their triangles'
+        # centroids, in the tangent plane.
+        target = np.array([np.bincount(flat, weights=np.repeat(wc[k], 3), minlength=nv)[idx_free]
+                           for k in range(3)]) / total[idx_free]
+        step_free = target - P[:, idx_free]
+        nf = N[:, idx_free]
+        step_free -= _dot(step_free, nf) * nf
+        # On a box face: to the middle of the two boundary neighbours, along
+        # the boundary curve (tangent = face normal x grad F).
+        e0, e1 = self.ends[0, idx_face], self.ends[1, idx_face]
+        step_face = 0.5 * (P[:, e0] + P[:, e1]) - P[:, idx_face]
+        ax = np.zeros((3, len(idx_face)))
+        ax[self.axis[idx_face], np.arange(len(idx_face))] = 1.0
+        tangent, _ = _unit(_cross(ax, N[:, idx_face]))
+        step_face = _dot(step_face, tangent) * tangent
+        idx = np.concatenate([idx_free, idx_face])
+        step = np.concatenate([step_free, step_face], axis=1)
+        length = np.sqrt(_dot(step, step))
+        limit = tol.IMPROVE_STEP * h[idx]
+        step *= np.minimum(1.0, limit / np.maximum(length, 1e-300))
+        length = np.minimum(length, limit)
+        go = length > 1e-6 * h[idx]
+        idx, step, length = idx[go], step[:, go], length[go]
+        if len(idx) == 0:
+            return 0, 0
+        free_axes = np.ones((3, len(idx)), bool)
+        nfree = int(go[:len(idx_free)].sum())
+        free_axes[self.axis[idx[nfree:]], np.arange(nfree, len(idx))] = False
+        start = P[:, idx] + step
+        q, g, res = _newton(surface, start, free_axes)
+        new_normal, _ = _unit(g)
+        size, box = self.size, self.box
+        ok = np.isfinite(q).all(axis=0) & (res <= tol.IMPROVE_RESIDUAL * size)
+        d = q - start
+        ok &= np.sqrt(_dot(d, d)) <= tol.IMPROVE_PROJECTION * length + tol.IMPROVE_RESIDUAL * size
+        ok &= _dot(new_normal, N[:, idx]) >= tol.IMPROVE_NORMAL_TURN
+        # Inside the box (a free vertex off its faces, a face vertex within its face).
+        margin = 1e-9 * size
+        inside = (q >= box[:, :1] + margin) & (q <= box[:, 1:] - margin)
+        ok &= (inside | ~free_axes).all(axis=0)
+        rejected = int((~ok).sum())
+        keep = np.flatnonzero(ok)
+        keep = keep[np.argsort(idx[keep])]  # sorted: undone vertices are found by bisection
+        idx, q, new_normal, g = idx[keep], q[:, keep], new_normal[:, keep], g[:, keep]
+        # Folds and lean: undo the moves of vertices of triangles that got worse.
+        moved = np.zeros(nv, bool)
+        moved[idx] = True
+        touched = np.flatnonzero(moved[f].any(axis=1))
+        ft = f[touched]
+        old = [np.take(P, ft[:, i], axis=1) for i in range(3)]
+        ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
+        bound = np.minimum(_lean(*old, ref), tol.IMPROVE_LEAN)
+        old_p, old_n, old_g = P[:, idx], N[:, idx], self.g[:, idx]
+        P[:, idx], N[:, idx], self.g[:, idx] = q, new_normal, g
+        undone = 0
+        for _ in range(8):
+            now = [np.take(P, ft[:, i], axis=1) for i in range(3)]
+            ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
+            lean = _lean(*now, ref)
+            back = ft[(lean < bound) | (lean <= 0)].ravel()
+            back = np.unique(back[moved[back]])
+            if len(back) == 0:
+                break
+            k = np.searchsorted(idx, back)
+            P[:, back], N[:, back], self.g[:, back] = old_p[:, k], old_n[:, k], old_g[:, k]
+            moved[back] = False
+            undone += len(back)
+        else:
+            # Still not settled: undo every move of this step.
+            P[:, idx], N[:, idx], self.g[:, idx] = old_p, old_n, old_g
+            undone += int(moved.sum())
+            moved[:] = False
+        self._faces()
+        return int(moved.sum()), rejected + undone
 
 
 def _newton(surface, p, free_axes):
-    """Newton steps along (the free part of) grad F: the points, grad F there and |F| / |grad F|."""
+    """Newton steps along (the free part of) grad F from (3, K) points: the points, grad F there, |F| / |grad F|."""
     for _ in range(tol.IMPROVE_NEWTON):
-        val, g = surface.value_gradient(p)
-        g = g * free_axes
+        val, g = surface.value_gradient(p.T)
+        g = g.T * free_axes
         gg = _dot(g, g)
-        s = np.where(gg > 0, val / np.where(gg > 0, gg, 1.0), 0.0)
-        p = p - s[:, None] * g
-    val, g = surface.value_gradient(p)
-    gn = _norm(g * free_axes)
+        p = p - np.where(gg > 0, val / np.where(gg > 0, gg, 1.0), 0.0) * g
+    val, g = surface.value_gradient(p.T)
+    g = np.ascontiguousarray(g.T)
+    gn = np.sqrt(_dot(g * free_axes, g * free_axes))
     res = np.where(gn > 0, np.abs(val) / np.where(gn > 0, gn, 1.0), np.inf)
     return p, g, res

@@ -502,7 +502,7 @@ IMPROVE_FLIP_PASSES = 4
 
 #: Relaxation moves the vertices of triangles with an angle below this
 #: (degrees) and their neighbours; the others are well placed already.
-IMPROVE_ACTIVE_ANGLE = 35.0
+IMPROVE_ACTIVE_ANGLE = 25.0
 
 #: A vertex moves at most this fraction of its local edge length per
 #: relaxation step: Newton then starts close to the surface (the tangent
