@@ -29,7 +29,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .mesh import CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning, unit_normals
+from .mesh import CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
 
@@ -224,14 +224,12 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict) -> 
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
     t_improve = time.perf_counter()
-    improved, normals = {}, None
+    improved = {}
     if improve:
         # Singular points have keys below 0 (centre vertices the smallest
         # int64, and they move); curve and crease vertices the keys fixed.
         singular_vertex = (vkeys < 0) & (vkeys != np.iinfo(np.int64).min)
-        vertices, faces, grad, improved = improve_mesh(vertices, faces, surf, b, singular_vertex,
-                                                       np.isin(vkeys, fixed))
-        normals = unit_normals(grad)  # grad F at the vertices as they are now
+        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed))
     t_improve = time.perf_counter() - t_improve
     # Where two axis skeletons meet (normal along an axis), for reference:
     # the mesh does not use them, so they are found when first asked for.
@@ -267,7 +265,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict) -> 
         "improve_time": t_improve,
         "time": time.perf_counter() - t0,
     }
-    m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, normals=normals, singularities=singular, stats=stats,
+    m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
              skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
              special_points=special, curve_graph=_curve_graph(curves, vkeys, curve_key0))
     # Nothing is dropped silently: a point with branches that is not a
