@@ -319,13 +319,15 @@ class _State:
     def relax(self, surface) -> tuple[int, int]:
         """One relaxation step: returns (moved, undone)."""
         nv, f, P, N = self.nv, self.f, self.p, self.n
+        # Only vertices near a triangle with a small angle move: the rest
+        # are well placed already, and Newton costs per point.
+        small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
+        if not small.any():
+            return 0, 0
         flat = f.ravel()
         w = np.repeat(self.area2, 3)
         total = np.bincount(flat, weights=w, minlength=nv)
         wc = self.area2 * self.centre
-        # Only vertices near a triangle with a small angle move: the rest
-        # are well placed already, and Newton costs per point.
-        small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
         near = np.zeros(nv, bool)
         near[f[small].ravel()] = True
         active = np.zeros(nv, bool)
@@ -407,7 +409,7 @@ class _State:
             P[:, idx], N[:, idx] = old_p, old_n
             undone += int(moved.sum())
             moved[:] = False
-        self._faces()
+        self._faces(touched)  # the triangles at the vertices that moved (and may be back)
         return int(moved.sum()), rejected + undone
 
 
