@@ -21,6 +21,7 @@ from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, poi
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
+from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
 from singmesh.skeleton.singular_curves import singular_curves
@@ -64,7 +65,8 @@ def check_box(box) -> np.ndarray:
     return b
 
 
-def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, size: str = "uniform",
+def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,
+         size: str = "uniform",
          min_edge: float | None = None, max_edge: float | None = None, chord: float | None = None,
          **params) -> Mesh:
     """Mesh the real surface F = 0 inside ``box``.
@@ -89,6 +91,12 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, size: s
         ``CREASE_MAX_RAISE`` times (``Mesh.stats["crease_gap"]``: their
         distance in boxes at the level used);
         ``Mesh.stats["fine"]`` is the value used.
+    improve : bool
+        Make the triangles well-shaped (:mod:`singmesh.facets.improve`):
+        edge flips and vertices moved on the surface, keeping the singular
+        points, the curves, the box's corners and the topology.  False
+        gives the triangles as the boxes make them, vertices at the
+        crossings with the lattice.
     size : {"uniform", "curvature"}
         ``"uniform"``: triangles about box / ``coarse`` wherever the surface
         is simple.  ``"curvature"``: triangles sized by the surface's
@@ -128,7 +136,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, size: s
     # Non-polynomial F are NaN outside their domain and infinite at poles:
     # the stages handle such values, numpy need not warn of each.
     with _one_blas_thread(), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return _mesh(surface, box, coarse, fine, params, (size, min_edge, max_edge, chord))
+        return _mesh(surface, box, coarse, fine, improve, params, (size, min_edge, max_edge, chord))
 
 
 _BLAS: list = []
@@ -181,7 +189,8 @@ def _sizing_levels(size: str, min_edge, max_edge, chord, fine_level: int) -> tup
     return coarse_level, min_level, float(values["chord"])
 
 
-def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform", None, None, None)) -> Mesh:
+def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
+          sizing=("uniform", None, None, None)) -> Mesh:
     """:func:`mesh` itself."""
     t0 = time.perf_counter()
     surf = Surface.parse(surface, **params)
@@ -296,6 +305,14 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
                                       project=surf.project, apex=apex, fixed_keys=fixed)
+    t_improve = time.perf_counter()
+    improved = {}
+    if improve:
+        # Singular points have keys below 0 (centre vertices the smallest
+        # int64, and they move); curve and crease vertices the keys fixed.
+        singular_vertex = (vkeys < 0) & (vkeys != np.iinfo(np.int64).min)
+        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed))
+    t_improve = time.perf_counter() - t_improve
     # Where two axis skeletons meet (normal along an axis), for reference:
     # the mesh does not use them, so they are found when first asked for.
     node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
@@ -327,6 +344,8 @@ def _mesh(surface, box, coarse: int, fine: int, params: dict, sizing=("uniform",
         # Distance (fine cells) of the two closest creases, where closer
         # than CREASE_MIN_GAP (then ``fine`` was raised for them), else None.
         "crease_gap": gap if np.isfinite(gap) else None,
+        "improve": improved,
+        "improve_time": t_improve,
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,

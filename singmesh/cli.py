@@ -1,9 +1,9 @@
 """The ``singmesh`` command line.
 
 ``singmesh mesh "EQUATION" -o out.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [--fine N]
-[--size curvature [--chord D] [--min-edge E] [--max-edge E]] [--no-curvature] [a=1 ...]``
+[--size curvature [--chord D] [--min-edge E] [--max-edge E]] [--no-curvature] [--no-improve] [a=1 ...]``
 meshes, writes (with the per-vertex curvatures as point data in PLY, VTK
-and VTU files, unless ``--no-curvature``) and prints the report (``--defs FILE --name NAME`` instead of
+and VTU files, unless ``--no-curvature``) and prints the report (with the triangles' angles) (``--defs FILE --name NAME`` instead of
 the equation meshes a definition of a SingSurf file on its own box);
 ``singmesh defs FILE`` lists such a file; ``singmesh classify "EQUATION" --at X Y Z``
 names a singular point; ``singmesh gallery ...`` builds the gallery.  Bad
@@ -61,6 +61,9 @@ def _mesh_command(argv: list[str]) -> int:
     p.add_argument("--no-curvature", action="store_true",
                    help="do not write the per-vertex curvatures (gaussian_curvature, mean_curvature, k1, k2), "
                         "which go by default as point data into .ply .vtk .vtu files")
+    p.add_argument("--no-improve", action="store_true",
+                   help="keep the triangles as the boxes make them (vertices at the lattice crossings; "
+                        "by default flips and moves on the surface make them well-shaped)")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     args = p.parse_args(argv)
@@ -80,7 +83,8 @@ def _mesh_command(argv: list[str]) -> int:
         params = _params(args.args[1:])
         box = box or DEFAULT_BOX
     sizing = {"size": args.size, "min_edge": args.min_edge, "max_edge": args.max_edge, "chord": args.chord}
-    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, **sizing, **({} if args.defs else params))
+    m = mesh(surface, box, coarse=args.coarse, fine=args.fine, improve=not args.no_improve, **sizing,
+             **({} if args.defs else params))
     print(m.report_text())
     if args.output:
         try:

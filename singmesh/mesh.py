@@ -23,6 +23,16 @@ CURVATURE_FORMATS = ("ply", "vtk", "vtu", "xdmf", "gmsh")
 
 #: The names of the curvature arrays in files.
 CURVATURE_NAMES = ("gaussian_curvature", "mean_curvature", "k1", "k2")
+#: Triangles with a vertex nearer than this (fraction of the box's largest
+#: side) to a singular point or curve are left out of the angle statistics
+#: "away from singular" of the report (issue #12's rule).
+AWAY = 0.05
+
+
+def _percent(flags: np.ndarray) -> float:
+    """Percentage of True in ``flags`` (0 for none)."""
+    return float(100.0 * flags.mean()) if flags.size else 0.0
+
 
 #: Formats whose files hold line cells beside the triangles.
 LINE_FORMATS = ("vtk", "vtu", "xdmf", "gmsh")
@@ -38,6 +48,18 @@ class CreaseWarning(UserWarning):
 
 class EmptyMeshWarning(UserWarning):
     """The mesh has no triangle: the surface does not meet the box (the warning says why)."""
+
+
+def unit_normals(g: np.ndarray) -> np.ndarray:
+    """Rows of ``g`` (grad F at vertices) scaled to unit length.
+
+    Zero where grad F is 0 (an isolated line) or not finite (a vertex on a
+    pole line, where F = 0 / 0).
+    """
+    g = np.asarray(g, float).reshape(-1, 3)
+    norm = np.linalg.norm(g, axis=1, keepdims=True)
+    ok = (norm > 0) & np.isfinite(norm)
+    return np.where(ok, g / np.where(ok, norm, 1), 0.0)
 
 
 @dataclass
@@ -109,11 +131,7 @@ class Mesh:
     def __post_init__(self):
         if self.normals is None:
             g = self.surface.gradient(self.vertices) if len(self.vertices) else np.zeros((0, 3))
-            norm = np.linalg.norm(g, axis=1, keepdims=True)
-            # Zero where grad F is 0 (an isolated line) or not finite (a
-            # vertex on a pole line, where F = 0 / 0).
-            ok = (norm > 0) & np.isfinite(norm)
-            self.normals = np.where(ok, g / np.where(ok, norm, 1), 0.0)
+            self.normals = unit_normals(g)
 
     @property
     def skeleton_nodes(self) -> np.ndarray:
@@ -195,6 +213,7 @@ class Mesh:
         else:
             dist = np.zeros(0)
         angles = topology.triangle_angles(v, f) if len(f) else np.zeros((0, 3))
+        away = self.away_from_singularities()
         return {
             "vertices": len(v),
             "faces": len(f),
@@ -206,12 +225,44 @@ class Mesh:
             "components": topology.component_count(len(v), f),
             "max_distance": float(dist.max() / size) if len(dist) else 0.0,
             "min_angle": float(angles.min()) if len(angles) else float("nan"),
+            "angles_below_10_percent": _percent(angles < 10),
+            "angles_below_20_percent": _percent(angles < 20),
+            # The same on the triangles of away_from_singularities().
+            "triangles_away": int(away.sum()),
+            "min_angle_away": float(angles[away].min()) if away.any() else float("nan"),
+            "angles_below_10_percent_away": _percent(angles[away] < 10),
+            "angles_below_20_percent_away": _percent(angles[away] < 20),
             "singular_points": len(self.singularities),
             "singular_curves": len(self.singular_curves),
             "creases": sum(c.type == "crease" for c in self.singular_curves),
             "special_points": len(self.special_points),
             "line_cells": int(len(self.curve_lines()[1])),
         }
+
+    def away_from_singularities(self, reach: float | None = None) -> np.ndarray:
+        """The triangles away from singular points and curves: (T,) bool.
+
+        A triangle is away when none of its vertices lies within ``reach``
+        (default ``AWAY``, 5%) of the box's largest side of a singular
+        point, of a point of a singular curve or crease, or of a special
+        point (the angle statistics of :meth:`report` are also given on
+        these alone: at such points the triangles must meet the
+        singularity and cannot all be well-shaped).
+        """
+        reach = AWAY if reach is None else reach
+        f = self.faces
+        if len(f) == 0:
+            return np.zeros(0, bool)
+        centres = [self.singular_points, np.asarray(self.curve_graph[0], float).reshape(-1, 3)]
+        centres += [np.array([sp.point for sp in self.special_points], float).reshape(-1, 3)]
+        centres = np.concatenate(centres)
+        if len(centres) == 0:
+            return np.ones(len(f), bool)
+        from scipy.spatial import cKDTree
+
+        size = float(np.max(self.box[:, 1] - self.box[:, 0]))
+        near = cKDTree(centres).query(self.vertices, distance_upper_bound=reach * size)[0] <= reach * size
+        return ~near[f].any(axis=1)
 
     def report_text(self) -> str:
         """The report as aligned lines, singular points after it."""
@@ -226,7 +277,11 @@ class Mesh:
             f"Euler characteristic {r['euler_characteristic']}",
             f"components           {r['components']}",
             f"max |F|/|grad F|     {r['max_distance']:.2e} of the box size",
-            f"min angle            {r['min_angle']:.2f} degrees",
+            f"min angle            {r['min_angle']:.2f} degrees ({r['angles_below_10_percent']:.2f}% of the angles "
+            f"< 10, {r['angles_below_20_percent']:.2f}% < 20)",
+            f"  away from singular {r['min_angle_away']:.2f} degrees ({r['angles_below_10_percent_away']:.2f}% < 10, "
+            f"{r['angles_below_20_percent_away']:.2f}% < 20; the {r['triangles_away']} triangles "
+            f"{100 * AWAY:g}% of the box or more from singular points and curves)",
         ]
         if "time" in self.stats:
             lines.append(f"time                 {self.stats['time']:.3f} s")

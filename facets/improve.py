@@ -1,0 +1,439 @@
+"""Well-shaped triangles on the surface, without changing what the mesh represents.
+
+The crossings of the surface with the lattice make triangles of any shape:
+a crossing near a lattice point gives an edge of almost no length beside
+edges of a whole cell.  This stage makes them well-shaped (issue #12) by
+rounds of
+
+* edge flips: an interior edge whose two triangles are not locally
+  Delaunay (opposite angles summing over 180 degrees) is flipped where
+  that raises the smallest of their six angles and makes no edge that
+  exists, no fold and no triangle leaning further from the surface; each
+  pass flips a set of edges no two of which share a triangle;
+* tangential relaxation: each free vertex moves in its tangent plane
+  towards the area-weighted mean of its triangles' centroids (a step of
+  Lloyd's CVT iteration), a vertex on one face of the domain box along the
+  curve where the surface meets that face (to the middle of its two
+  boundary neighbours), then back onto F = 0 by Newton.
+
+Kept as they are: the vertices at singular points and every edge at them
+(so the fans there are the same), the vertices on singular curves and
+creases and those within two edges of them with every edge at them (the
+sheets meeting at a curve are close there), the vertices on two or more
+faces of the box (corners of the boundary), and the vertices of boundary
+edges off the box or of non-manifold edges.  A move is undone where
+Newton does not land on the surface near where it started (a jump to
+another sheet near a double curve or a crease), where the normal turns
+away, where it leaves the box, and where a triangle at the vertex would
+fold or lean further from the surface.  Flips change no boundary edge,
+no vertex and no triangle count: the Euler characteristic, the
+components and the fans at singular points stay.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from singmesh import tolerances as tol
+
+# Coordinates are kept as (3, n) arrays (one row per axis): gathers and
+# products of rows cost a third of those of (n, 3) rows for the few
+# thousand points of a mesh, and this stage must cost little next to the
+# meshing itself.
+
+
+def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarray,
+                 apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Flip and relax the triangles of a mesh of ``surface`` into good shape.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        On the surface.
+    faces : (T, 3) int64
+        Consistently oriented triangles.
+    surface : Surface
+        Only ``value_gradient`` is used: any surface.
+    box : (3, 2) float64
+        The domain: vertices on one of its faces stay in that face.
+    apex : (V,) bool
+        Singular points: they stay, and no edge at them is flipped or made.
+    curve : (V,) bool
+        Vertices on singular curves and creases: they and the vertices
+        ``IMPROVE_CURVE_RINGS`` edges from them stay, and no edge at those
+        is flipped or made.
+
+    Returns
+    -------
+    vertices : (V, 3) float64
+        The same vertices in the same order, some moved on the surface.
+    faces : (T, 3) int64
+        As many triangles.
+    info : dict
+        Counts of flips, moves and moves undone.
+    """
+    v = np.array(vertices, dtype=float).reshape(-1, 3)
+    f = np.array(faces, dtype=np.int64).reshape(-1, 3)
+    info = {"flips": 0, "moves": 0, "undone": 0}
+    _, g = surface.value_gradient(v)
+    if len(f) == 0:
+        return v, f, info
+    box = np.asarray(box, float)
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    state = _State(v, f, g, np.asarray(apex, bool), np.asarray(curve, bool), box, size)
+    for last in [False] * tol.IMPROVE_ROUNDS + [True]:
+        dirty, flips = None, 0
+        for _ in range(tol.IMPROVE_FLIP_PASSES):
+            n, dirty = state.flip_pass(dirty)
+            flips += n
+            if n == 0:
+                break
+        info["flips"] += flips
+        if last:
+            break
+        moved, undone = state.relax(surface)
+        info["moves"] += moved
+        info["undone"] += undone
+        if moved == 0 and flips == 0:
+            break  # nothing changed: nothing will
+    return state.p.T.copy(), state.f, info
+
+
+def _cross(a, b):
+    """Cross products of the columns of (3, n) arrays."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _dot(a, b):
+    """Dot products of the columns of (3, n) arrays."""
+    return np.einsum("ij,ij->j", a, b)
+
+
+def _unit(a):
+    """Columns of a (3, n) array scaled to unit length (zero where 0 or not finite), and the lengths."""
+    n = np.sqrt(_dot(a, a))
+    ok = (n > 0) & np.isfinite(n)
+    return np.where(ok, a / np.where(ok, n, 1.0), 0.0), np.where(ok, n, 0.0)
+
+
+def _max_cos(p, q, r):
+    """Largest cosine of the angles of triangles (p, q, r), (3, n) each: the smallest angle's."""
+    u, w, x = q - p, r - q, p - r
+    lu, lw, lx = _dot(u, u), _dot(w, w), _dot(x, x)
+    c0 = -_dot(x, u) / np.sqrt(np.maximum(lx * lu, 1e-300))
+    c1 = -_dot(u, w) / np.sqrt(np.maximum(lu * lw, 1e-300))
+    c2 = -_dot(w, x) / np.sqrt(np.maximum(lw * lx, 1e-300))
+    return np.maximum(np.maximum(c0, c1), c2)
+
+
+def _lean(p, q, r, ref):
+    """Cosine between the normals of triangles (p, q, r) and ``ref``; -1 where no area."""
+    n = _cross(q - p, r - p)
+    ln = _dot(n, n)
+    longest = np.maximum(np.maximum(_dot(q - p, q - p), _dot(r - q, r - q)), _dot(p - r, p - r))
+    c = _dot(n, ref) / np.sqrt(np.maximum(ln * _dot(ref, ref), 1e-300))
+    return np.where(np.sqrt(ln) > tol.ZERO_AREA * longest, c, -1.0)
+
+
+class _State:
+    """The mesh being shaped: positions, normals, triangles, half-edge twins and vertex roles.
+
+    Half-edge ``h = 3 t + i`` runs from ``f[t, i]`` to ``f[t, (i + 1) % 3]``;
+    ``twin[h]`` is the opposite half-edge in the triangle across, -1 on the
+    boundary, at non-manifold edges and where the two triangles disagree in
+    orientation (such edges are never flipped).
+
+    Roles: ``free`` vertices move in their tangent plane; ``face`` vertices
+    (on one face of the box, axis ``axis``) move along the boundary between
+    their two boundary neighbours ``ends``; the others stay.
+    """
+
+    def __init__(self, v, f, g, apex, curve, box, size):
+        nv = len(v)
+        self.p = np.ascontiguousarray(v.T)
+        self.n, gnorm = _unit(np.ascontiguousarray(g.T))
+        self.f, self.nv, self.apex, self.curve, self.box, self.size = f, nv, apex, curve, box, size
+        # Next to a curve the sheets meeting there are close (tangent ones
+        # within ~ distance^2): the vertices a few edges from the curve stay
+        # and their edges stay, as the tubes made them.
+        near = curve.copy()
+        for _ in range(tol.IMPROVE_CURVE_RINGS):
+            near[f[near[f].any(axis=1)].ravel()] = True
+        self.near_curve = near
+        self.noflip = apex | near
+        m = 3 * len(f)
+        h = np.arange(m)
+        self.next = h - h % 3 + (h % 3 + 1) % 3
+        self.prev = h - h % 3 + (h % 3 + 2) % 3
+        u = f.ravel()
+        w = u[self.next]
+        key = np.minimum(u, w) * nv + np.maximum(u, w)
+        order = np.argsort(key, kind="stable")
+        ks = key[order]
+        start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+        length = np.diff(np.r_[start, m])
+        two = start[length == 2]
+        h1, h2 = order[two], order[two + 1]
+        ok = u[h1] == w[h2]
+        self.twin = np.full(m, -1, np.int64)
+        self.twin[h1[ok]] = h2[ok]
+        self.twin[h2[ok]] = h1[ok]
+        #: Sorted keys ``min * nv + max`` of all edges.
+        self.keys = ks[start]
+        self._roles(self.keys // nv, self.keys % nv, length, gnorm)
+        self._faces()
+
+    # ------------------------------------------------------------ roles
+    def _roles(self, a, b, counts, gnorm):
+        v, box, size, nv = self.p, self.box, self.size, self.nv
+        eps = tol.IMPROVE_ON_BOX * size
+        on = (np.abs(v - box[:, :1]) <= eps) | (np.abs(v - box[:, 1:]) <= eps)  # (3, V)
+        faces_on = on.sum(axis=0)
+        stay = self.apex | self.near_curve | (faces_on >= 2)
+        # No tangent plane where grad F vanishes or is not finite.
+        ok = gnorm > 0
+        stay |= ~ok | (gnorm < 1e-8 * np.median(gnorm[ok])) if ok.any() else True
+        border = counts == 1
+        # A boundary edge must lie in one face of the box; the others (and
+        # non-manifold edges) keep their vertices.
+        same_face = (on[:, a] & on[:, b] & (np.abs(v[:, a] - v[:, b]) <= eps)).any(axis=0)
+        bad = (counts > 2) | (border & ~same_face)
+        stay[a[bad]] = True
+        stay[b[bad]] = True
+        # On one box face with exactly two boundary neighbours: slides between them.
+        src = np.concatenate([a[border & ~bad], b[border & ~bad]])
+        dst = np.concatenate([b[border & ~bad], a[border & ~bad]])
+        nb = np.bincount(src, minlength=nv)
+        face = (faces_on == 1) & ~stay & (nb == 2)
+        stay |= faces_on == 1
+        order = np.argsort(src, kind="stable")
+        src, dst = src[order], dst[order]
+        first = np.r_[True, src[1:] != src[:-1]] if len(src) else np.zeros(0, bool)
+        self.ends = np.full((2, nv), -1, np.int64)
+        self.ends[0, src[first]] = dst[first]
+        self.ends[1, src[~first]] = dst[~first]
+        self.axis = np.argmax(on, axis=0)
+        self.free = ~stay
+        self.face = face
+
+    # ------------------------------------------------------------ per triangle
+    def _faces(self, which=None):
+        """Per triangle: cotangents at the corners, largest cosine, doubled area, centroid (all or ``which``)."""
+        f = self.f if which is None else self.f[which]
+        q0, q1, q2 = (np.take(self.p, f[:, i], axis=1) for i in range(3))
+        e0, e1, e2 = q1 - q0, q2 - q1, q0 - q2
+        l0, l1, l2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)
+        d0, d1, d2 = -_dot(e0, e2), -_dot(e0, e1), -_dot(e1, e2)
+        area2 = np.sqrt(_dot(*(2 * [_cross(e0, -e2)])))
+        a = np.maximum(area2, 1e-300)
+        cot = np.stack([d0 / a, d1 / a, d2 / a], axis=1)
+        big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
+                                    d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
+                         d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
+        centre = (q0 + q1 + q2) / 3.0
+        if which is None:
+            self.cot, self.big, self.area2, self.centre = cot, big, area2, centre
+        else:
+            self.cot[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
+
+    # ------------------------------------------------------------ flips
+    def flip_pass(self, dirty):
+        """One pass of flips among the edges of triangles ``dirty`` (all if None).
+
+        Returns the number of flips and the triangles to look at next.
+        """
+        f, nv, twin = self.f, self.nv, self.twin
+        fl = f.ravel()
+        if dirty is None:
+            h = np.flatnonzero(twin > np.arange(len(twin)))
+        else:
+            h = (3 * dirty[:, None] + np.arange(3)).ravel()
+            t = twin[h]
+            h = np.unique(np.minimum(h, t)[t >= 0])
+        h2 = twin[h]
+        # Locally Delaunay unless the angles opposite the edge sum over 180
+        # degrees: cot(gamma) + cot(delta) < 0.
+        cot_opp = self.cot[:, [2, 0, 1]].ravel()
+        want = cot_opp[h] + cot_opp[h2] < -1e-9
+        h, h2 = h[want], h2[want]
+        a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
+        apex, curve = self.noflip, self.curve
+        ok = (c != d) & ~apex[a] & ~apex[b] & ~apex[c] & ~apex[d]
+        ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
+        # The new edge c-d must not exist already.
+        new = np.minimum(c, d) * nv + np.maximum(c, d)
+        keys = self.keys
+        ok &= keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
+        if len(h) == 0:
+            return 0, np.zeros(0, np.int64)
+        t1, t2 = h // 3, h2 // 3
+        P, N = self.p, self.n
+        pa, pb, pc, pd = (np.take(P, x, axis=1) for x in (a, b, c, d))
+        # The smallest of the six angles (largest cosine) must grow.
+        old = np.maximum(self.big[t1], self.big[t2])
+        cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
+        # No fold, no zero area, no more lean from the surface than before.
+        na, nb, nc, nd = (np.take(N, x, axis=1) for x in (a, b, c, d))
+        lean_old = np.minimum(_lean(pa, pb, pc, na + nb + nc), _lean(pb, pa, pd, nb + na + nd))
+        lean_new = np.minimum(_lean(pa, pd, pc, na + nd + nc), _lean(pb, pc, pd, nb + nc + nd))
+        ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
+        if not ok.any():
+            return 0, np.zeros(0, np.int64)
+        h, h2, a, b, c, d, new, t1, t2 = (x[ok] for x in (h, h2, a, b, c, d, new, t1, t2))
+        gain = old[ok] - cos_new[ok]
+        # An independent set: each triangle goes to its best flip; a flip is
+        # done when it is the best of both its triangles, and of the flips
+        # making the same new edge.
+        rank = np.empty(len(gain), np.int64)
+        rank[np.argsort(-gain, kind="stable")] = np.arange(len(gain))
+        best = np.full(len(f), len(gain), np.int64)
+        np.minimum.at(best, t1, rank)
+        np.minimum.at(best, t2, rank)
+        take = np.flatnonzero((best[t1] == rank) & (best[t2] == rank))
+        take = take[np.argsort(rank[take], kind="stable")]
+        _, first = np.unique(new[take], return_index=True)
+        take = np.sort(take[first])
+        later = np.ones(len(h), bool)
+        later[take] = False
+        dirty = np.unique(np.concatenate([t1[later], t2[later], t1[take], t2[take]]))
+        h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
+        # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
+        # b->c, c->a, a->d, d->b move to their places in them.
+        n1, p1, n2, p2 = self.next[h], self.prev[h], self.next[h2], self.prev[h2]
+        remap = np.arange(len(twin))
+        remap[n1], remap[p1], remap[n2], remap[p2] = 3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2
+        out = np.where(twin >= 0, remap[np.maximum(twin, 0)], -1)
+        moving = [out[n1], out[p1], out[n2], out[p2]]
+        out[remap[n1]], out[remap[p1]], out[remap[n2]], out[remap[p2]] = moving
+        out[3 * t1 + 1], out[3 * t2 + 1] = 3 * t2 + 1, 3 * t1 + 1
+        self.twin = out
+        f[t1] = np.stack([a, d, c], axis=1)
+        f[t2] = np.stack([b, c, d], axis=1)
+        gone = np.minimum(a, b) * nv + np.maximum(a, b)
+        self.keys = np.sort(np.concatenate([np.delete(keys, np.searchsorted(keys, gone)), new]))
+        self._faces(np.concatenate([t1, t2]))
+        return len(h), dirty
+
+    # ------------------------------------------------------------ relaxation
+    def relax(self, surface) -> tuple[int, int]:
+        """One relaxation step: returns (moved, undone)."""
+        nv, f, P, N = self.nv, self.f, self.p, self.n
+        # Only vertices near a triangle with a small angle move: the rest
+        # are well placed already, and Newton costs per point.
+        small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
+        if not small.any():
+            return 0, 0
+        flat = f.ravel()
+        w = np.repeat(self.area2, 3)
+        total = np.bincount(flat, weights=w, minlength=nv)
+        wc = self.area2 * self.centre
+        near = np.zeros(nv, bool)
+        near[f[small].ravel()] = True
+        active = np.zeros(nv, bool)
+        active[f[near[f].any(axis=1)].ravel()] = True
+        idx_free = np.flatnonzero(self.free & active & (total > 0))
+        idx_face = np.flatnonzero(self.face & active)
+        # Local edge length: the side of an equilateral triangle of the mean area.
+        count = np.bincount(flat, minlength=nv)
+        h = np.sqrt(2.0 / np.sqrt(3.0) * total / np.maximum(count, 1))
+        # Free vertices: towards the area-weighted mean of their triangles'
+        # centroids, in the tangent plane.
+        target = np.array([np.bincount(flat, weights=np.repeat(wc[k], 3), minlength=nv)[idx_free]
+                           for k in range(3)]) / total[idx_free]
+        step_free = target - P[:, idx_free]
+        nf = N[:, idx_free]
+        step_free -= _dot(step_free, nf) * nf
+        # On a box face: to the middle of the two boundary neighbours, along
+        # the boundary curve (tangent = face normal x grad F).
+        e0, e1 = self.ends[0, idx_face], self.ends[1, idx_face]
+        step_face = 0.5 * (P[:, e0] + P[:, e1]) - P[:, idx_face]
+        ax = np.zeros((3, len(idx_face)))
+        ax[self.axis[idx_face], np.arange(len(idx_face))] = 1.0
+        tangent, _ = _unit(_cross(ax, N[:, idx_face]))
+        step_face = _dot(step_face, tangent) * tangent
+        idx = np.concatenate([idx_free, idx_face])
+        step = np.concatenate([step_free, step_face], axis=1)
+        length = np.sqrt(_dot(step, step))
+        limit = tol.IMPROVE_STEP * h[idx]
+        step *= np.minimum(1.0, limit / np.maximum(length, 1e-300))
+        length = np.minimum(length, limit)
+        go = length > 1e-6 * h[idx]
+        idx, step, length = idx[go], step[:, go], length[go]
+        if len(idx) == 0:
+            return 0, 0
+        free_axes = np.ones((3, len(idx)), bool)
+        nfree = int(go[:len(idx_free)].sum())
+        free_axes[self.axis[idx[nfree:]], np.arange(nfree, len(idx))] = False
+        start = P[:, idx] + step
+        q, g, res = _newton(surface, start, free_axes)  # g: the normal to check, not kept
+        new_normal, _ = _unit(g)
+        size, box = self.size, self.box
+        ok = np.isfinite(q).all(axis=0) & (res <= tol.IMPROVE_RESIDUAL * size)
+        d = q - start
+        ok &= np.sqrt(_dot(d, d)) <= tol.IMPROVE_PROJECTION * length + tol.IMPROVE_RESIDUAL * size
+        ok &= _dot(new_normal, N[:, idx]) >= tol.IMPROVE_NORMAL_TURN
+        # Inside the box (a free vertex off its faces, a face vertex within its face).
+        margin = 1e-9 * size
+        inside = (q >= box[:, :1] + margin) & (q <= box[:, 1:] - margin)
+        ok &= (inside | ~free_axes).all(axis=0)
+        rejected = int((~ok).sum())
+        keep = np.flatnonzero(ok)
+        keep = keep[np.argsort(idx[keep])]  # sorted: undone vertices are found by bisection
+        idx, q, new_normal = idx[keep], q[:, keep], new_normal[:, keep]
+        # Folds and lean: undo the moves of vertices of triangles that got worse.
+        moved = np.zeros(nv, bool)
+        moved[idx] = True
+        touched = np.flatnonzero(moved[f].any(axis=1))
+        ft = f[touched]
+        old = [np.take(P, ft[:, i], axis=1) for i in range(3)]
+        ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
+        bound = np.minimum(_lean(*old, ref), tol.IMPROVE_LEAN)
+        old_p, old_n = P[:, idx], N[:, idx]
+        P[:, idx], N[:, idx] = q, new_normal
+        undone = 0
+        for _ in range(8):
+            now = [np.take(P, ft[:, i], axis=1) for i in range(3)]
+            ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
+            lean = _lean(*now, ref)
+            back = ft[(lean < bound) | (lean <= 0)].ravel()
+            back = np.unique(back[moved[back]])
+            if len(back) == 0:
+                break
+            k = np.searchsorted(idx, back)
+            P[:, back], N[:, back] = old_p[:, k], old_n[:, k]
+            moved[back] = False
+            undone += len(back)
+        else:
+            # Still not settled: undo every move of this step.
+            P[:, idx], N[:, idx] = old_p, old_n
+            undone += int(moved.sum())
+            moved[:] = False
+        self._faces(touched)  # the triangles at the vertices that moved (and may be back)
+        return int(moved.sum()), rejected + undone
+
+
+def _newton(surface, p, free_axes):
+    """Newton steps along (the free part of) grad F from (3, K) points.
+
+    Each step takes grad F where it starts; the residual |F| / |grad F| at
+    the end divides by the last step's grad F (F alone costs less than F
+    and grad F; from a point 1e-8 of an edge off the surface the two
+    gradients agree to far better than the 1e-12 asked).
+
+    Returns the points, grad F (the last evaluated) and the residual.
+    """
+    for k in range(tol.IMPROVE_NEWTON + 1):
+        if k < tol.IMPROVE_NEWTON:
+            val, g = surface.value_gradient(p.T)
+            g = np.ascontiguousarray(g.T)
+            gf = g * free_axes
+            gg = _dot(gf, gf)
+            inv = np.where(gg > 0, 1.0 / np.where(gg > 0, gg, 1.0), 0.0)
+        else:
+            val = surface(p.T)
+        if k == tol.IMPROVE_NEWTON:
+            break
+        p = p - val * inv * gf
+    res = np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
+    return p, g, res
