@@ -982,6 +982,11 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     return _tube_widths(surface, out, step)
 
 
+#: Special points whose whole ball (CURVE_MEET_BALL cells) is tube
+#: (facets.tubes.MEET_KINDS): no wide tube is asked for inside it.
+_MEET_KINDS = ("crossing of cuspidal edges",)
+
+
 def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     """Which edges need a wide tube, and its radius: from the branches' separation measured across the curve.
 
@@ -1001,6 +1006,11 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     reach = branch_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
     v_wide = np.zeros(len(curves.points), bool)
     need = np.zeros(len(curves.points))
+    meets = np.array([sp.point for sp in curves.special if sp.kind in _MEET_KINDS]).reshape(-1, 3)
+    in_meet_ball = np.zeros(len(curves.points), bool)
+    if len(meets):
+        d = np.abs(curves.points[:, None, :] - meets[None]).max(axis=2).min(axis=1)
+        in_meet_ball = d <= tol.CURVE_MEET_BALL * step
     for c in curves.pieces:
         # A piece as a whole: its median (where a cusp degenerates at a
         # special point, the balls around it widen the tube).  The tacnode
@@ -1011,8 +1021,10 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
             v_wide[c.vertices] = True
             need[c.vertices] = max(r, tol.CURVE_TANGENT_RADIUS) if tacnode else r
         elif c.sheets >= 1:
-            # Only where this stretch needs it: the rest keeps the usual tube.
-            far = reach[c.vertices] > tol.CURVE_TANGENT_RADIUS
+            # Only where this stretch needs it: the rest keeps the usual tube;
+            # and not inside the balls round crossings of cuspidal edges,
+            # which are tube whole (a wide tube there joined other sheets).
+            far = (reach[c.vertices] > tol.CURVE_TANGENT_RADIUS) & ~in_meet_ball[c.vertices]
             v_wide[c.vertices[far]] = True
             need[c.vertices[far]] = reach[c.vertices[far]]
     wide = v_wide[curves.edges].all(axis=1)
