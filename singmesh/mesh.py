@@ -152,18 +152,22 @@ class Mesh:
 
     @property
     def gaussian_curvature(self) -> np.ndarray:
+        """(V,) Gaussian curvature K = k1 k2 at each vertex (NaN where F is not smooth)."""
         return self._curvatures().gaussian
 
     @property
     def mean_curvature(self) -> np.ndarray:
+        """(V,) mean curvature (k1 + k2) / 2, positive where the surface bends towards grad F."""
         return self._curvatures().mean
 
     @property
     def principal_curvatures(self) -> np.ndarray:
+        """(V, 2) principal curvatures k1 >= k2."""
         return self._curvatures().principal
 
     @property
     def principal_directions(self) -> np.ndarray:
+        """(V, 2, 3) unit tangent directions of k1 and k2."""
         return self._curvatures().directions
 
     def _curvatures(self):
