@@ -163,8 +163,8 @@ class _State:
         self.noflip = apex | near
         m = 3 * len(f)
         h = np.arange(m)
-        self.next = h - h % 3 + (h % 3 + 1) % 3
-        self.prev = h - h % 3 + (h % 3 + 2) % 3
+        self.next = h.reshape(-1, 3)[:, [1, 2, 0]].ravel()
+        self.prev = h.reshape(-1, 3)[:, [2, 0, 1]].ravel()
         u = f.ravel()
         w = u[self.next]
         key = np.minimum(u, w) * nv + np.maximum(u, w)
@@ -178,8 +178,12 @@ class _State:
         self.twin = np.full(m, -1, np.int64)
         self.twin[h1[ok]] = h2[ok]
         self.twin[h2[ok]] = h1[ok]
-        #: Sorted keys ``min * nv + max`` of all edges.
+        #: Sorted keys ``min * nv + max`` of the edges of the input (those
+        #: still there: ``alive``) and of the edges flips made (``extra``,
+        #: few: sorting them is cheap where re-sorting all keys is not).
         self.keys = ks[start]
+        self.alive = np.ones(len(self.keys), bool)
+        self.extra = np.zeros(0, np.int64)
         self._roles(self.keys // nv, self.keys % nv, length, gnorm)
         self._faces()
 
@@ -196,7 +200,9 @@ class _State:
         border = counts == 1
         # A boundary edge must lie in one face of the box; the others (and
         # non-manifold edges) keep their vertices.
-        same_face = (on[:, a] & on[:, b] & (np.abs(v[:, a] - v[:, b]) <= eps)).any(axis=0)
+        ba, bb = a[border], b[border]
+        same_face = np.zeros(len(a), bool)
+        same_face[border] = (on[:, ba] & on[:, bb] & (np.abs(v[:, ba] - v[:, bb]) <= eps)).any(axis=0)
         bad = (counts > 2) | (border & ~same_face)
         stay[a[bad]] = True
         stay[b[bad]] = True
@@ -262,8 +268,7 @@ class _State:
         ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
         # The new edge c-d must not exist already.
         new = np.minimum(c, d) * nv + np.maximum(c, d)
-        keys = self.keys
-        ok &= keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        ok &= ~self._exists(new)
         h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
         if len(h) == 0:
             return 0, np.zeros(0, np.int64)
@@ -310,10 +315,31 @@ class _State:
         self.twin = out
         f[t1] = np.stack([a, d, c], axis=1)
         f[t2] = np.stack([b, c, d], axis=1)
-        gone = np.minimum(a, b) * nv + np.maximum(a, b)
-        self.keys = np.sort(np.concatenate([np.delete(keys, np.searchsorted(keys, gone)), new]))
+        self._replace(np.minimum(a, b) * nv + np.maximum(a, b), new)
         self._faces(np.concatenate([t1, t2]))
         return len(h), dirty
+
+    def _exists(self, new):
+        """Whether the edges with keys ``new`` are in the mesh."""
+        keys, extra = self.keys, self.extra
+        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        out = (keys[k] == new) & self.alive[k]
+        if len(extra):
+            out |= extra[np.minimum(np.searchsorted(extra, new), len(extra) - 1)] == new
+        return out
+
+    def _replace(self, gone, new):
+        """Edges ``gone`` (in the mesh) leave it, edges ``new`` (not in it, distinct) come."""
+        keys, extra = self.keys, self.extra
+        k = np.minimum(np.searchsorted(keys, gone), len(keys) - 1)
+        base = (keys[k] == gone) & self.alive[k]
+        self.alive[k[base]] = False
+        if len(extra):
+            extra = np.delete(extra, np.searchsorted(extra, gone[~base]))
+        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        back = keys[k] == new  # an edge of the input that a flip removed, made again
+        self.alive[k[back]] = True
+        self.extra = np.sort(np.concatenate([extra, new[~back]]))
 
     # ------------------------------------------------------------ relaxation
     def relax(self, surface) -> tuple[int, int]:
