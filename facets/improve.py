@@ -224,7 +224,7 @@ class _State:
 
     # ------------------------------------------------------------ per triangle
     def _faces(self, which=None):
-        """Per triangle: cotangents at the corners, largest cosine, doubled area, centroid (all or ``which``)."""
+        """Per triangle: cotangents opposite the half-edges, largest cosine, doubled area, centroid (all or ``which``)."""
         f = self.f if which is None else self.f[which]
         q0, q1, q2 = (np.take(self.p, f[:, i], axis=1) for i in range(3))
         e0, e1, e2 = q1 - q0, q2 - q1, q0 - q2
@@ -232,15 +232,15 @@ class _State:
         d0, d1, d2 = -_dot(e0, e2), -_dot(e0, e1), -_dot(e1, e2)
         area2 = np.sqrt(_dot(*(2 * [_cross(e0, -e2)])))
         a = np.maximum(area2, 1e-300)
-        cot = np.stack([d0 / a, d1 / a, d2 / a], axis=1)
+        cot = np.stack([d2 / a, d0 / a, d1 / a], axis=1)  # opposite half-edge 3 t + i
         big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
                                     d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
                          d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
         centre = (q0 + q1 + q2) / 3.0
         if which is None:
-            self.cot, self.big, self.area2, self.centre = cot, big, area2, centre
+            self.cot_opp, self.big, self.area2, self.centre = cot, big, area2, centre
         else:
-            self.cot[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
+            self.cot_opp[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
 
     # ------------------------------------------------------------ flips
     def flip_pass(self, dirty):
@@ -255,11 +255,13 @@ class _State:
         else:
             h = (3 * dirty[:, None] + np.arange(3)).ravel()
             t = twin[h]
-            h = np.unique(np.minimum(h, t)[t >= 0])
+            mark = np.zeros(len(twin), bool)  # a mask, not np.unique: no sort
+            mark[np.minimum(h, t)[t >= 0]] = True
+            h = np.flatnonzero(mark)
         h2 = twin[h]
         # Locally Delaunay unless the angles opposite the edge sum over 180
         # degrees: cot(gamma) + cot(delta) < 0.
-        cot_opp = self.cot[:, [2, 0, 1]].ravel()
+        cot_opp = self.cot_opp.ravel()
         want = cot_opp[h] + cot_opp[h2] < -1e-9
         h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
@@ -299,18 +301,25 @@ class _State:
         take = take[np.argsort(rank[take], kind="stable")]
         _, first = np.unique(new[take], return_index=True)
         take = np.sort(take[first])
-        later = np.ones(len(h), bool)
-        later[take] = False
-        dirty = np.unique(np.concatenate([t1[later], t2[later], t1[take], t2[take]]))
+        mark = np.zeros(len(f), bool)
+        mark[t1] = True
+        mark[t2] = True
+        dirty = np.flatnonzero(mark)
         h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
         # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
         # b->c, c->a, a->d, d->b move to their places in them.
         n1, p1, n2, p2 = self.next[h], self.prev[h], self.next[h2], self.prev[h2]
+        src = np.concatenate([n1, p1, n2, p2])
+        dst = np.concatenate([3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2])
         remap = np.arange(len(twin))
-        remap[n1], remap[p1], remap[n2], remap[p2] = 3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2
-        out = np.where(twin >= 0, remap[np.maximum(twin, 0)], -1)
-        moving = [out[n1], out[p1], out[n2], out[p2]]
-        out[remap[n1]], out[remap[p1]], out[remap[n2]], out[remap[p2]] = moving
+        remap[src] = dst
+        # Only the moved half-edges and their twins change (their twins may
+        # have moved too: two flips can share an edge of the quads).
+        tw = twin[src]
+        tw = np.where(tw >= 0, remap[np.maximum(tw, 0)], -1)
+        out = twin.copy()
+        out[tw[tw >= 0]] = dst[tw >= 0]
+        out[dst] = tw
         out[3 * t1 + 1], out[3 * t2 + 1] = 3 * t2 + 1, 3 * t1 + 1
         self.twin = out
         f[t1] = np.stack([a, d, c], axis=1)
