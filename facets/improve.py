@@ -401,7 +401,7 @@ class _State:
         nfree = int(go[:len(idx_free)].sum())
         free_axes[self.axis[idx[nfree:]], np.arange(nfree, len(idx))] = False
         start = P[:, idx] + step
-        q, g, res = _newton(surface, start, free_axes)  # g: the normal to check, not kept
+        q, g, res = _newton(surface, start, free_axes, tol.IMPROVE_RESIDUAL * self.size)  # g: the normal to check, not kept
         new_normal, _ = _unit(g)
         size, box = self.size, self.box
         ok = np.isfinite(q).all(axis=0) & (res <= tol.IMPROVE_RESIDUAL * size)
@@ -448,27 +448,32 @@ class _State:
         return int(moved.sum()), rejected + undone
 
 
-def _newton(surface, p, free_axes):
+def _newton(surface, p, free_axes, target):
     """Newton steps along (the free part of) grad F from (3, K) points.
 
     Each step takes grad F where it starts; the residual |F| / |grad F| at
     the end divides by the last step's grad F (F alone costs less than F
     and grad F; from a point 1e-8 of an edge off the surface the two
-    gradients agree to far better than the 1e-12 asked).
+    gradients agree to far better than the 1e-12 asked).  After
+    ``IMPROVE_NEWTON - 1`` steps most points are within ``target``: only
+    the others take the last step (one evaluation of F and grad F at all
+    points fewer).
 
     Returns the points, grad F (the last evaluated) and the residual.
     """
-    for k in range(tol.IMPROVE_NEWTON + 1):
-        if k < tol.IMPROVE_NEWTON:
+    def steps(p, free_axes, n):
+        for _ in range(n):
             val, g = surface.value_gradient(p.T)
             g = np.ascontiguousarray(g.T)
             gf = g * free_axes
             gg = _dot(gf, gf)
             inv = np.where(gg > 0, 1.0 / np.where(gg > 0, gg, 1.0), 0.0)
-        else:
-            val = surface(p.T)
-        if k == tol.IMPROVE_NEWTON:
-            break
-        p = p - val * inv * gf
-    res = np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
+            p = p - val * inv * gf
+        val = surface(p.T)
+        return p, g, np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
+
+    p, g, res = steps(p, free_axes, max(tol.IMPROVE_NEWTON - 1, 1))
+    more = np.flatnonzero(~(res <= target))
+    if len(more) and tol.IMPROVE_NEWTON > 1:
+        p[:, more], g[:, more], res[more] = steps(p[:, more], free_axes[:, more], 1)
     return p, g, res
