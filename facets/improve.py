@@ -81,8 +81,12 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
     box = np.asarray(box, float)
     size = float(np.max(box[:, 1] - box[:, 0]))
     state = _State(v, f, g, np.asarray(apex, bool), np.asarray(curve, bool), box, size)
+    # The first pass looks at every edge; later ones only at the triangles
+    # that changed since (flips left to look at, vertices moved): an edge
+    # whose two triangles did not change stays as it was judged.
+    dirty = None
     for last in [False] * tol.IMPROVE_ROUNDS + [True]:
-        dirty, flips = None, 0
+        flips = 0
         for _ in range(tol.IMPROVE_FLIP_PASSES):
             n, dirty = state.flip_pass(dirty)
             flips += n
@@ -91,11 +95,15 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         info["flips"] += flips
         if last:
             break
-        moved, undone = state.relax(surface)
+        moved, undone, touched = state.relax(surface)
         info["moves"] += moved
         info["undone"] += undone
         if moved == 0 and flips == 0:
             break  # nothing changed: nothing will
+        mark = np.zeros(len(f), bool)
+        mark[dirty] = True
+        mark[touched] = True
+        dirty = np.flatnonzero(mark)
     return state.p.T.copy(), state.f, info
 
 
@@ -355,22 +363,22 @@ class _State:
         self.extra = np.sort(np.concatenate([extra, new[~back]]))
 
     # ------------------------------------------------------------ relaxation
-    def relax(self, surface) -> tuple[int, int]:
-        """One relaxation step: returns (moved, undone)."""
+    def relax(self, surface) -> tuple[int, int, np.ndarray]:
+        """One relaxation step: returns (moved, undone, the triangles at vertices that moved)."""
         nv, f, P, N = self.nv, self.f, self.p, self.n
         # Only vertices near a triangle with a small angle move: the rest
         # are well placed already, and Newton costs per point.
         small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
         if not small.any():
-            return 0, 0
+            return 0, 0, np.zeros(0, np.int64)
         flat = f.ravel()
         w = np.repeat(self.area2, 3)
         total = np.bincount(flat, weights=w, minlength=nv)
         wc = self.area2 * self.centre
-        near = np.zeros(nv, bool)
-        near[f[small].ravel()] = True
         active = np.zeros(nv, bool)
-        active[f[near[f].any(axis=1)].ravel()] = True
+        active[f[small].ravel()] = True
+        for _ in range(tol.IMPROVE_ACTIVE_RINGS):
+            active[f[active[f].any(axis=1)].ravel()] = True
         idx_free = np.flatnonzero(self.free & active & (total > 0))
         idx_face = np.flatnonzero(self.face & active)
         # Local edge length: the side of an equilateral triangle of the mean area.
@@ -400,7 +408,7 @@ class _State:
         go = length > 1e-6 * h[idx]
         idx, step, length = idx[go], step[:, go], length[go]
         if len(idx) == 0:
-            return 0, 0
+            return 0, 0, np.zeros(0, np.int64)
         free_axes = np.ones((3, len(idx)), bool)
         nfree = int(go[:len(idx_free)].sum())
         free_axes[self.axis[idx[nfree:]], np.arange(nfree, len(idx))] = False
@@ -449,7 +457,7 @@ class _State:
             undone += int(moved.sum())
             moved[:] = False
         self._faces(touched)  # the triangles at the vertices that moved (and may be back)
-        return int(moved.sum()), rejected + undone
+        return int(moved.sum()), rejected + undone, touched
 
 
 def _newton(surface, p, free_axes, target):

@@ -555,6 +555,9 @@ IMPROVE_FLIP_PASSES = 2
 #: at 20 the margin shrinks).
 IMPROVE_ACTIVE_ANGLE = 25.0
 
+#: ... and the vertices this many edges from those.
+IMPROVE_ACTIVE_RINGS = 1
+
 #: A vertex moves at most this fraction of its local edge length per
 #: relaxation step: Newton then starts close to the surface (the tangent
 #: plane is off it by ~ curvature x step^2) and cannot reach another sheet.
