@@ -232,7 +232,7 @@ class _State:
 
     # ------------------------------------------------------------ per triangle
     def _faces(self, which=None):
-        """Per triangle: cotangents opposite the half-edges, largest cosine, doubled area, centroid (all or ``which``)."""
+        """Per triangle: cotangents opposite the half-edges, largest cosine and doubled area (all or ``which``)."""
         if which is not None and 2 * len(which) > len(self.f):
             which = None  # most triangles: all at once costs less than gather and scatter
         f = self.f if which is None else self.f[which]
@@ -244,15 +244,19 @@ class _State:
         # product; the cancellation in slivers costs ~1e-16 / angle^2 relative.
         area2 = np.sqrt(np.maximum(l0 * l2 - d0 * d0, 0.0))
         a = np.maximum(area2, 1e-300)
-        cot = np.stack([d2 / a, d0 / a, d1 / a], axis=1)  # opposite half-edge 3 t + i
         big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
                                     d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
                          d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
-        centre = (q0 + q1 + q2) / 3.0
         if which is None:
-            self.cot_opp, self.big, self.area2, self.centre = cot, big, area2, centre
+            # Row i: the cotangent opposite half-edge 3 t + i.
+            self.cot = np.empty((3, len(f)))
+            which = slice(None)
+        cot = self.cot
+        cot[0, which], cot[1, which], cot[2, which] = d2 / a, d0 / a, d1 / a
+        if isinstance(which, slice):
+            self.big, self.area2 = big, area2
         else:
-            self.cot_opp[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
+            self.big[which], self.area2[which] = big, area2
 
     # ------------------------------------------------------------ flips
     def flip_pass(self, dirty):
@@ -273,8 +277,8 @@ class _State:
         h2 = twin[h]
         # Locally Delaunay unless the angles opposite the edge sum over 180
         # degrees: cot(gamma) + cot(delta) < 0.
-        cot_opp = self.cot_opp.ravel()
-        want = cot_opp[h] + cot_opp[h2] < -1e-9
+        cot = self.cot
+        want = cot[h % 3, h // 3] + cot[h2 % 3, h2 // 3] < -1e-9
         h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
         apex, curve = self.noflip, self.curve
@@ -371,14 +375,19 @@ class _State:
         small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
         if not small.any():
             return 0, 0, np.zeros(0, np.int64)
-        flat = f.ravel()
-        w = np.repeat(self.area2, 3)
-        total = np.bincount(flat, weights=w, minlength=nv)
-        wc = self.area2 * self.centre
         active = np.zeros(nv, bool)
         active[f[small].ravel()] = True
         for _ in range(tol.IMPROVE_ACTIVE_RINGS):
             active[f[active[f].any(axis=1)].ravel()] = True
+        # The triangles at active vertices: all their sums (the others add
+        # nothing to them, and the order of the terms is the same).
+        sub = np.flatnonzero(active[f].any(axis=1))
+        fs = f[sub]
+        flat = fs.ravel()
+        area2 = self.area2[sub]
+        total = np.bincount(flat, weights=np.repeat(area2, 3), minlength=nv)
+        wc = area2 * ((np.take(P, fs[:, 0], axis=1) + np.take(P, fs[:, 1], axis=1)
+                       + np.take(P, fs[:, 2], axis=1)) / 3.0)
         idx_free = np.flatnonzero(self.free & active & (total > 0))
         idx_face = np.flatnonzero(self.face & active)
         # Local edge length: the side of an equilateral triangle of the mean area.
@@ -431,7 +440,7 @@ class _State:
         # Folds and lean: undo the moves of vertices of triangles that got worse.
         moved = np.zeros(nv, bool)
         moved[idx] = True
-        touched = np.flatnonzero(moved[f].any(axis=1))
+        touched = sub[moved[fs].any(axis=1)]
         ft = f[touched]
         old = [np.take(P, ft[:, i], axis=1) for i in range(3)]
         ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
