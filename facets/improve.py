@@ -98,8 +98,10 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         moved, undone, touched = state.relax(surface)
         info["moves"] += moved
         info["undone"] += undone
-        if moved == 0 and flips == 0:
-            break  # nothing changed: nothing will
+        if moved == 0 and (flips == 0 or state.calm):
+            # Nothing changed, or no angle is below IMPROVE_ACTIVE_ANGLE: the
+            # flips left to judge would only reshape triangles good enough.
+            break
         mark = np.zeros(len(f), bool)
         mark[dirty] = True
         mark[touched] = True
@@ -373,7 +375,8 @@ class _State:
         # Only vertices near a triangle with a small angle move: the rest
         # are well placed already, and Newton costs per point.
         small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
-        if not small.any():
+        self.calm = not small.any()
+        if self.calm:
             return 0, 0, np.zeros(0, np.int64)
         active = np.zeros(nv, bool)
         active[f[small].ravel()] = True
