@@ -43,7 +43,8 @@ from singmesh import tolerances as tol
 
 
 def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarray,
-                 apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+                 apex: np.ndarray, curve: np.ndarray,
+                 gradient: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """Flip and relax the triangles of a mesh of ``surface`` into good shape.
 
     Parameters
@@ -62,6 +63,8 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         Vertices on singular curves and creases: they and the vertices
         ``IMPROVE_CURVE_RINGS`` edges from them stay, and no edge at those
         is flipped or made.
+    gradient : (V, 3) float64, optional
+        grad F at ``vertices`` where known already (evaluated here if not).
 
     Returns
     -------
@@ -75,7 +78,7 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
     v = np.array(vertices, dtype=float).reshape(-1, 3)
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     info = {"flips": 0, "moves": 0, "undone": 0}
-    _, g = surface.value_gradient(v)
+    g = surface.value_gradient(v)[1] if gradient is None else np.asarray(gradient, float).reshape(-1, 3)
     if len(f) == 0:
         return v, f, info
     box = np.asarray(box, float)
