@@ -296,15 +296,17 @@ class _State:
         if len(h) == 0:
             return 0, np.zeros(0, np.int64)
         t1, t2 = h // 3, h2 // 3
-        P, N = self.p, self.n
-        pa, pb, pc, pd = (np.take(P, x, axis=1) for x in (a, b, c, d))
+        P, N, k = self.p, self.n, len(h)
+        # The four triangles in one array each (few calls on small arrays):
+        # new (a, d, c), (b, c, d), old (a, b, c), (b, a, d).
+        tp, tq, tr = np.concatenate([a, b, a, b]), np.concatenate([d, c, b, a]), np.concatenate([c, d, c, d])
+        p, q, r = np.take(P, tp, axis=1), np.take(P, tq, axis=1), np.take(P, tr, axis=1)
         # The smallest of the six angles (largest cosine) must grow.
         old = np.maximum(self.big[t1], self.big[t2])
-        cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
+        cos_new = _max_cos(p[:, :2 * k], q[:, :2 * k], r[:, :2 * k]).reshape(2, k).max(axis=0)
         # No fold, no zero area, no more lean from the surface than before.
-        na, nb, nc, nd = (np.take(N, x, axis=1) for x in (a, b, c, d))
-        lean_old = np.minimum(_lean(pa, pb, pc, na + nb + nc), _lean(pb, pa, pd, nb + na + nd))
-        lean_new = np.minimum(_lean(pa, pd, pc, na + nd + nc), _lean(pb, pc, pd, nb + nc + nd))
+        lean = _lean(p, q, r, np.take(N, tp, axis=1) + np.take(N, tq, axis=1) + np.take(N, tr, axis=1)).reshape(4, k)
+        lean_new, lean_old = np.minimum(lean[0], lean[1]), np.minimum(lean[2], lean[3])
         ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
         if not ok.any():
             return 0, np.zeros(0, np.int64)
