@@ -170,7 +170,7 @@ class _State:
         # within ~ distance^2): the vertices a few edges from the curve stay
         # and their edges stay, as the tubes made them.
         near = curve.copy()
-        for _ in range(tol.IMPROVE_CURVE_RINGS):
+        for _ in range(tol.IMPROVE_CURVE_RINGS if curve.any() else 0):
             near[f[near[f].any(axis=1)].ravel()] = True
         self.near_curve = near
         self.noflip = apex | near
@@ -209,7 +209,11 @@ class _State:
         stay = self.apex | self.near_curve | (faces_on >= 2)
         # No tangent plane where grad F vanishes or is not finite.
         ok = gnorm > 0
-        stay |= ~ok | (gnorm < 1e-8 * np.median(gnorm[ok])) if ok.any() else True
+        if ok.any():
+            typical = np.partition(gnorm[ok], ok.sum() // 2)[ok.sum() // 2]  # the (upper) median
+            stay |= ~ok | (gnorm < 1e-8 * typical)
+        else:
+            stay[:] = True
         border = counts == 1
         # A boundary edge must lie in one face of the box; the others (and
         # non-manifold edges) keep their vertices.
