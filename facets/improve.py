@@ -257,11 +257,11 @@ class _State:
                                     d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
                          d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
         if which is None:
-            # Row i: the cotangent opposite half-edge 3 t + i.
-            self.cot = np.empty((3, len(f)))
+            # Entry [t, i]: the cotangent opposite half-edge 3 t + i.
+            self.cot = np.empty((len(f), 3))
             which = slice(None)
         cot = self.cot
-        cot[0, which], cot[1, which], cot[2, which] = d2 / a, d0 / a, d1 / a
+        cot[which, 0], cot[which, 1], cot[which, 2] = d2 / a, d0 / a, d1 / a
         if isinstance(which, slice):
             self.big, self.area2 = big, area2
         else:
@@ -286,8 +286,8 @@ class _State:
         h2 = twin[h]
         # Locally Delaunay unless the angles opposite the edge sum over 180
         # degrees: cot(gamma) + cot(delta) < 0.
-        cot = self.cot
-        want = cot[h % 3, h // 3] + cot[h2 % 3, h2 // 3] < -1e-9
+        cot = self.cot.ravel()
+        want = cot[h] + cot[h2] < -1e-9
         h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
         apex, curve = self.noflip, self.curve
