@@ -568,6 +568,8 @@ IMPROVE_STEP = 0.5
 
 #: Newton steps after a move (quadratic convergence from a start within
 #: a fraction of an edge length of the surface: three reach rounding).
+#: The last is taken only where the residual below is not met after the
+#: others (sphere: none of 1080 points; tanglecube: 1043 of 4441).
 IMPROVE_NEWTON = 3
 
 #: A moved vertex stays only if |F| / |grad F| there is below this
