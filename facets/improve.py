@@ -101,7 +101,7 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         moved, undone, touched = state.relax(surface)
         info["moves"] += moved
         info["undone"] += undone
-        if moved == 0 and (flips == 0 or state.calm):
+        if (moved == 0 and (flips == 0 or state.calm)) or (moved and state.is_calm()):
             # Nothing changed, or no angle is below IMPROVE_ACTIVE_ANGLE: the
             # flips left to judge would only reshape triangles good enough.
             break
@@ -378,6 +378,10 @@ class _State:
         self.extra = np.sort(np.concatenate([extra, new[~back]]))
 
     # ------------------------------------------------------------ relaxation
+    def is_calm(self) -> bool:
+        """Whether no triangle has an angle below ``IMPROVE_ACTIVE_ANGLE``."""
+        return not (self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))).any()
+
     def relax(self, surface) -> tuple[int, int, np.ndarray]:
         """One relaxation step: returns (moved, undone, the triangles at vertices that moved)."""
         nv, f, P, N = self.nv, self.f, self.p, self.n
