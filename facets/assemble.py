@@ -182,6 +182,7 @@ def assemble(
     project: Callable[[np.ndarray], np.ndarray] | None = None,
     apex: np.ndarray | None = None,
     fixed_keys: np.ndarray | None = None,
+    return_gradient: bool = False,
 ):
     """Vertices and triangles from polygons given by vertex keys.
 
@@ -197,10 +198,14 @@ def assemble(
     fixed_keys : (F,) int64, optional
         Keys of vertices on a curve of singular points: an edge between
         two of them is never flipped (it is the curve, or a crease).
+    return_gradient : bool
+        Also return grad F at the vertices (the orientation reference,
+        evaluated once: the shaping stage needs it too).
 
     Returns
     -------
     vertices : (V, 3), faces : (T, 3) int64, key_of_vertex : (V,) int64
+    gradient : (V, 3), only with ``return_gradient``
     """
     uniq, ids = np.unique(keys, return_inverse=True)
     first = np.zeros(len(uniq), np.int64)
@@ -226,4 +231,7 @@ def assemble(
     used = np.zeros(len(vertices), bool)
     used[faces.ravel()] = True
     remap = np.cumsum(used) - 1
+    if return_gradient:
+        grad = np.concatenate([normals, gradient(extra)]) if len(extra) else normals
+        return vertices[used], remap[faces], vkeys[used], grad[used]
     return vertices[used], remap[faces], vkeys[used]

@@ -43,7 +43,8 @@ from singmesh import tolerances as tol
 
 
 def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarray,
-                 apex: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+                 apex: np.ndarray, curve: np.ndarray,
+                 gradient: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """Flip and relax the triangles of a mesh of ``surface`` into good shape.
 
     Parameters
@@ -62,6 +63,8 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         Vertices on singular curves and creases: they and the vertices
         ``IMPROVE_CURVE_RINGS`` edges from them stay, and no edge at those
         is flipped or made.
+    gradient : (V, 3) float64, optional
+        grad F at ``vertices`` where known already (evaluated here if not).
 
     Returns
     -------
@@ -75,14 +78,18 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
     v = np.array(vertices, dtype=float).reshape(-1, 3)
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     info = {"flips": 0, "moves": 0, "undone": 0}
-    _, g = surface.value_gradient(v)
+    g = surface.value_gradient(v)[1] if gradient is None else np.asarray(gradient, float).reshape(-1, 3)
     if len(f) == 0:
         return v, f, info
     box = np.asarray(box, float)
     size = float(np.max(box[:, 1] - box[:, 0]))
     state = _State(v, f, g, np.asarray(apex, bool), np.asarray(curve, bool), box, size)
+    # The first pass looks at every edge; later ones only at the triangles
+    # that changed since (flips left to look at, vertices moved): an edge
+    # whose two triangles did not change stays as it was judged.
+    dirty = None
     for last in [False] * tol.IMPROVE_ROUNDS + [True]:
-        dirty, flips = None, 0
+        flips = 0
         for _ in range(tol.IMPROVE_FLIP_PASSES):
             n, dirty = state.flip_pass(dirty)
             flips += n
@@ -91,11 +98,17 @@ def improve_mesh(vertices: np.ndarray, faces: np.ndarray, surface, box: np.ndarr
         info["flips"] += flips
         if last:
             break
-        moved, undone = state.relax(surface)
+        moved, undone, touched = state.relax(surface)
         info["moves"] += moved
         info["undone"] += undone
-        if moved == 0 and flips == 0:
-            break  # nothing changed: nothing will
+        if (moved == 0 and (flips == 0 or state.calm)) or (moved and state.is_calm()):
+            # Nothing changed, or no angle is below IMPROVE_ACTIVE_ANGLE: the
+            # flips left to judge would only reshape triangles good enough.
+            break
+        mark = np.zeros(len(f), bool)
+        mark[dirty] = True
+        mark[touched] = True
+        dirty = np.flatnonzero(mark)
     return state.p.T.copy(), state.f, info
 
 
@@ -157,14 +170,14 @@ class _State:
         # within ~ distance^2): the vertices a few edges from the curve stay
         # and their edges stay, as the tubes made them.
         near = curve.copy()
-        for _ in range(tol.IMPROVE_CURVE_RINGS):
+        for _ in range(tol.IMPROVE_CURVE_RINGS if curve.any() else 0):
             near[f[near[f].any(axis=1)].ravel()] = True
         self.near_curve = near
         self.noflip = apex | near
         m = 3 * len(f)
         h = np.arange(m)
-        self.next = h - h % 3 + (h % 3 + 1) % 3
-        self.prev = h - h % 3 + (h % 3 + 2) % 3
+        self.next = h.reshape(-1, 3)[:, [1, 2, 0]].ravel()
+        self.prev = h.reshape(-1, 3)[:, [2, 0, 1]].ravel()
         u = f.ravel()
         w = u[self.next]
         key = np.minimum(u, w) * nv + np.maximum(u, w)
@@ -178,8 +191,12 @@ class _State:
         self.twin = np.full(m, -1, np.int64)
         self.twin[h1[ok]] = h2[ok]
         self.twin[h2[ok]] = h1[ok]
-        #: Sorted keys ``min * nv + max`` of all edges.
+        #: Sorted keys ``min * nv + max`` of the edges of the input (those
+        #: still there: ``alive``) and of the edges flips made (``extra``,
+        #: few: sorting them is cheap where re-sorting all keys is not).
         self.keys = ks[start]
+        self.alive = np.ones(len(self.keys), bool)
+        self.extra = np.zeros(0, np.int64)
         self._roles(self.keys // nv, self.keys % nv, length, gnorm)
         self._faces()
 
@@ -192,11 +209,17 @@ class _State:
         stay = self.apex | self.near_curve | (faces_on >= 2)
         # No tangent plane where grad F vanishes or is not finite.
         ok = gnorm > 0
-        stay |= ~ok | (gnorm < 1e-8 * np.median(gnorm[ok])) if ok.any() else True
+        if ok.any():
+            typical = np.partition(gnorm[ok], ok.sum() // 2)[ok.sum() // 2]  # the (upper) median
+            stay |= ~ok | (gnorm < 1e-8 * typical)
+        else:
+            stay[:] = True
         border = counts == 1
         # A boundary edge must lie in one face of the box; the others (and
         # non-manifold edges) keep their vertices.
-        same_face = (on[:, a] & on[:, b] & (np.abs(v[:, a] - v[:, b]) <= eps)).any(axis=0)
+        ba, bb = a[border], b[border]
+        same_face = np.zeros(len(a), bool)
+        same_face[border] = (on[:, ba] & on[:, bb] & (np.abs(v[:, ba] - v[:, bb]) <= eps)).any(axis=0)
         bad = (counts > 2) | (border & ~same_face)
         stay[a[bad]] = True
         stay[b[bad]] = True
@@ -218,23 +241,31 @@ class _State:
 
     # ------------------------------------------------------------ per triangle
     def _faces(self, which=None):
-        """Per triangle: cotangents at the corners, largest cosine, doubled area, centroid (all or ``which``)."""
+        """Per triangle: cotangents opposite the half-edges, largest cosine and doubled area (all or ``which``)."""
+        if which is not None and 2 * len(which) > len(self.f):
+            which = None  # most triangles: all at once costs less than gather and scatter
         f = self.f if which is None else self.f[which]
         q0, q1, q2 = (np.take(self.p, f[:, i], axis=1) for i in range(3))
         e0, e1, e2 = q1 - q0, q2 - q1, q0 - q2
         l0, l1, l2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)
         d0, d1, d2 = -_dot(e0, e2), -_dot(e0, e1), -_dot(e1, e2)
-        area2 = np.sqrt(_dot(*(2 * [_cross(e0, -e2)])))
+        # |e0 x e2|^2 = |e0|^2 |e2|^2 - (e0 . e2)^2 (Lagrange): no cross
+        # product; the cancellation in slivers costs ~1e-16 / angle^2 relative.
+        area2 = np.sqrt(np.maximum(l0 * l2 - d0 * d0, 0.0))
         a = np.maximum(area2, 1e-300)
-        cot = np.stack([d0 / a, d1 / a, d2 / a], axis=1)
         big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
                                     d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
                          d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
-        centre = (q0 + q1 + q2) / 3.0
         if which is None:
-            self.cot, self.big, self.area2, self.centre = cot, big, area2, centre
+            # Entry [t, i]: the cotangent opposite half-edge 3 t + i.
+            self.cot = np.empty((len(f), 3))
+            which = slice(None)
+        cot = self.cot
+        cot[which, 0], cot[which, 1], cot[which, 2] = d2 / a, d0 / a, d1 / a
+        if isinstance(which, slice):
+            self.big, self.area2 = big, area2
         else:
-            self.cot[which], self.big[which], self.area2[which], self.centre[:, which] = cot, big, area2, centre
+            self.big[which], self.area2[which] = big, area2
 
     # ------------------------------------------------------------ flips
     def flip_pass(self, dirty):
@@ -249,12 +280,14 @@ class _State:
         else:
             h = (3 * dirty[:, None] + np.arange(3)).ravel()
             t = twin[h]
-            h = np.unique(np.minimum(h, t)[t >= 0])
+            mark = np.zeros(len(twin), bool)  # a mask, not np.unique: no sort
+            mark[np.minimum(h, t)[t >= 0]] = True
+            h = np.flatnonzero(mark)
         h2 = twin[h]
         # Locally Delaunay unless the angles opposite the edge sum over 180
         # degrees: cot(gamma) + cot(delta) < 0.
-        cot_opp = self.cot[:, [2, 0, 1]].ravel()
-        want = cot_opp[h] + cot_opp[h2] < -1e-9
+        cot = self.cot.ravel()
+        want = cot[h] + cot[h2] < -1e-9
         h, h2 = h[want], h2[want]
         a, b, c, d = fl[h], fl[self.next[h]], fl[self.prev[h]], fl[self.prev[h2]]
         apex, curve = self.noflip, self.curve
@@ -262,21 +295,22 @@ class _State:
         ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
         # The new edge c-d must not exist already.
         new = np.minimum(c, d) * nv + np.maximum(c, d)
-        keys = self.keys
-        ok &= keys[np.minimum(np.searchsorted(keys, new), len(keys) - 1)] != new
+        ok &= ~self._exists(new)
         h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
         if len(h) == 0:
             return 0, np.zeros(0, np.int64)
         t1, t2 = h // 3, h2 // 3
-        P, N = self.p, self.n
-        pa, pb, pc, pd = (np.take(P, x, axis=1) for x in (a, b, c, d))
+        P, N, k = self.p, self.n, len(h)
+        # The four triangles in one array each (few calls on small arrays):
+        # new (a, d, c), (b, c, d), old (a, b, c), (b, a, d).
+        tp, tq, tr = np.concatenate([a, b, a, b]), np.concatenate([d, c, b, a]), np.concatenate([c, d, c, d])
+        p, q, r = np.take(P, tp, axis=1), np.take(P, tq, axis=1), np.take(P, tr, axis=1)
         # The smallest of the six angles (largest cosine) must grow.
         old = np.maximum(self.big[t1], self.big[t2])
-        cos_new = np.maximum(_max_cos(pa, pd, pc), _max_cos(pb, pc, pd))
+        cos_new = _max_cos(p[:, :2 * k], q[:, :2 * k], r[:, :2 * k]).reshape(2, k).max(axis=0)
         # No fold, no zero area, no more lean from the surface than before.
-        na, nb, nc, nd = (np.take(N, x, axis=1) for x in (a, b, c, d))
-        lean_old = np.minimum(_lean(pa, pb, pc, na + nb + nc), _lean(pb, pa, pd, nb + na + nd))
-        lean_new = np.minimum(_lean(pa, pd, pc, na + nd + nc), _lean(pb, pc, pd, nb + nc + nd))
+        lean = _lean(p, q, r, np.take(N, tp, axis=1) + np.take(N, tq, axis=1) + np.take(N, tr, axis=1)).reshape(4, k)
+        lean_new, lean_old = np.minimum(lean[0], lean[1]), np.minimum(lean[2], lean[3])
         ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
         if not ok.any():
             return 0, np.zeros(0, np.int64)
@@ -294,44 +328,82 @@ class _State:
         take = take[np.argsort(rank[take], kind="stable")]
         _, first = np.unique(new[take], return_index=True)
         take = np.sort(take[first])
-        later = np.ones(len(h), bool)
-        later[take] = False
-        dirty = np.unique(np.concatenate([t1[later], t2[later], t1[take], t2[take]]))
+        mark = np.zeros(len(f), bool)
+        mark[t1] = True
+        mark[t2] = True
+        dirty = np.flatnonzero(mark)
         h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
         # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
         # b->c, c->a, a->d, d->b move to their places in them.
         n1, p1, n2, p2 = self.next[h], self.prev[h], self.next[h2], self.prev[h2]
+        src = np.concatenate([n1, p1, n2, p2])
+        dst = np.concatenate([3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2])
         remap = np.arange(len(twin))
-        remap[n1], remap[p1], remap[n2], remap[p2] = 3 * t2, 3 * t1 + 2, 3 * t1, 3 * t2 + 2
-        out = np.where(twin >= 0, remap[np.maximum(twin, 0)], -1)
-        moving = [out[n1], out[p1], out[n2], out[p2]]
-        out[remap[n1]], out[remap[p1]], out[remap[n2]], out[remap[p2]] = moving
+        remap[src] = dst
+        # Only the moved half-edges and their twins change (their twins may
+        # have moved too: two flips can share an edge of the quads).
+        tw = twin[src]
+        tw = np.where(tw >= 0, remap[np.maximum(tw, 0)], -1)
+        out = twin.copy()
+        out[tw[tw >= 0]] = dst[tw >= 0]
+        out[dst] = tw
         out[3 * t1 + 1], out[3 * t2 + 1] = 3 * t2 + 1, 3 * t1 + 1
         self.twin = out
         f[t1] = np.stack([a, d, c], axis=1)
         f[t2] = np.stack([b, c, d], axis=1)
-        gone = np.minimum(a, b) * nv + np.maximum(a, b)
-        self.keys = np.sort(np.concatenate([np.delete(keys, np.searchsorted(keys, gone)), new]))
+        self._replace(np.minimum(a, b) * nv + np.maximum(a, b), new)
         self._faces(np.concatenate([t1, t2]))
         return len(h), dirty
 
+    def _exists(self, new):
+        """Whether the edges with keys ``new`` are in the mesh."""
+        keys, extra = self.keys, self.extra
+        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        out = (keys[k] == new) & self.alive[k]
+        if len(extra):
+            out |= extra[np.minimum(np.searchsorted(extra, new), len(extra) - 1)] == new
+        return out
+
+    def _replace(self, gone, new):
+        """Edges ``gone`` (in the mesh) leave it, edges ``new`` (not in it, distinct) come."""
+        keys, extra = self.keys, self.extra
+        k = np.minimum(np.searchsorted(keys, gone), len(keys) - 1)
+        base = (keys[k] == gone) & self.alive[k]
+        self.alive[k[base]] = False
+        if len(extra):
+            extra = np.delete(extra, np.searchsorted(extra, gone[~base]))
+        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        back = keys[k] == new  # an edge of the input that a flip removed, made again
+        self.alive[k[back]] = True
+        self.extra = np.sort(np.concatenate([extra, new[~back]]))
+
     # ------------------------------------------------------------ relaxation
-    def relax(self, surface) -> tuple[int, int]:
-        """One relaxation step: returns (moved, undone)."""
+    def is_calm(self) -> bool:
+        """Whether no triangle has an angle below ``IMPROVE_ACTIVE_ANGLE``."""
+        return not (self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))).any()
+
+    def relax(self, surface) -> tuple[int, int, np.ndarray]:
+        """One relaxation step: returns (moved, undone, the triangles at vertices that moved)."""
         nv, f, P, N = self.nv, self.f, self.p, self.n
         # Only vertices near a triangle with a small angle move: the rest
         # are well placed already, and Newton costs per point.
         small = self.big > np.cos(np.radians(tol.IMPROVE_ACTIVE_ANGLE))
-        if not small.any():
-            return 0, 0
-        flat = f.ravel()
-        w = np.repeat(self.area2, 3)
-        total = np.bincount(flat, weights=w, minlength=nv)
-        wc = self.area2 * self.centre
-        near = np.zeros(nv, bool)
-        near[f[small].ravel()] = True
+        self.calm = not small.any()
+        if self.calm:
+            return 0, 0, np.zeros(0, np.int64)
         active = np.zeros(nv, bool)
-        active[f[near[f].any(axis=1)].ravel()] = True
+        active[f[small].ravel()] = True
+        for _ in range(tol.IMPROVE_ACTIVE_RINGS):
+            active[f[active[f].any(axis=1)].ravel()] = True
+        # The triangles at active vertices: all their sums (the others add
+        # nothing to them, and the order of the terms is the same).
+        sub = np.flatnonzero(active[f].any(axis=1))
+        fs = f[sub]
+        flat = fs.ravel()
+        area2 = self.area2[sub]
+        total = np.bincount(flat, weights=np.repeat(area2, 3), minlength=nv)
+        wc = area2 * ((np.take(P, fs[:, 0], axis=1) + np.take(P, fs[:, 1], axis=1)
+                       + np.take(P, fs[:, 2], axis=1)) / 3.0)
         idx_free = np.flatnonzero(self.free & active & (total > 0))
         idx_face = np.flatnonzero(self.face & active)
         # Local edge length: the side of an equilateral triangle of the mean area.
@@ -361,12 +433,12 @@ class _State:
         go = length > 1e-6 * h[idx]
         idx, step, length = idx[go], step[:, go], length[go]
         if len(idx) == 0:
-            return 0, 0
+            return 0, 0, np.zeros(0, np.int64)
         free_axes = np.ones((3, len(idx)), bool)
         nfree = int(go[:len(idx_free)].sum())
         free_axes[self.axis[idx[nfree:]], np.arange(nfree, len(idx))] = False
         start = P[:, idx] + step
-        q, g, res = _newton(surface, start, free_axes)  # g: the normal to check, not kept
+        q, g, res = _newton(surface, start, free_axes, tol.IMPROVE_RESIDUAL * self.size)  # g: the normal to check, not kept
         new_normal, _ = _unit(g)
         size, box = self.size, self.box
         ok = np.isfinite(q).all(axis=0) & (res <= tol.IMPROVE_RESIDUAL * size)
@@ -384,7 +456,7 @@ class _State:
         # Folds and lean: undo the moves of vertices of triangles that got worse.
         moved = np.zeros(nv, bool)
         moved[idx] = True
-        touched = np.flatnonzero(moved[f].any(axis=1))
+        touched = sub[moved[fs].any(axis=1)]
         ft = f[touched]
         old = [np.take(P, ft[:, i], axis=1) for i in range(3)]
         ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
@@ -410,30 +482,35 @@ class _State:
             undone += int(moved.sum())
             moved[:] = False
         self._faces(touched)  # the triangles at the vertices that moved (and may be back)
-        return int(moved.sum()), rejected + undone
+        return int(moved.sum()), rejected + undone, touched
 
 
-def _newton(surface, p, free_axes):
+def _newton(surface, p, free_axes, target):
     """Newton steps along (the free part of) grad F from (3, K) points.
 
     Each step takes grad F where it starts; the residual |F| / |grad F| at
     the end divides by the last step's grad F (F alone costs less than F
     and grad F; from a point 1e-8 of an edge off the surface the two
-    gradients agree to far better than the 1e-12 asked).
+    gradients agree to far better than the 1e-12 asked).  After
+    ``IMPROVE_NEWTON - 1`` steps most points are within ``target``: only
+    the others take the last step (one evaluation of F and grad F at all
+    points fewer).
 
     Returns the points, grad F (the last evaluated) and the residual.
     """
-    for k in range(tol.IMPROVE_NEWTON + 1):
-        if k < tol.IMPROVE_NEWTON:
+    def steps(p, free_axes, n):
+        for _ in range(n):
             val, g = surface.value_gradient(p.T)
             g = np.ascontiguousarray(g.T)
             gf = g * free_axes
             gg = _dot(gf, gf)
             inv = np.where(gg > 0, 1.0 / np.where(gg > 0, gg, 1.0), 0.0)
-        else:
-            val = surface(p.T)
-        if k == tol.IMPROVE_NEWTON:
-            break
-        p = p - val * inv * gf
-    res = np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
+            p = p - val * inv * gf
+        val = surface(p.T)
+        return p, g, np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
+
+    p, g, res = steps(p, free_axes, max(tol.IMPROVE_NEWTON - 1, 1))
+    more = np.flatnonzero(~(res <= target))
+    if len(more) and tol.IMPROVE_NEWTON > 1:
+        p[:, more], g[:, more], res[more] = steps(p[:, more], free_axes[:, more], 1)
     return p, g, res

@@ -303,15 +303,16 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
                                               tube_id, key0, float(cell.max()), b)
     fixed = np.arange(key0, key0 + len(curves.points))
-    vertices, faces, vkeys = assemble(offsets, keys, pts, surf.gradient,
-                                      project=surf.project, apex=apex, fixed_keys=fixed)
+    vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
+                                             apex=apex, fixed_keys=fixed, return_gradient=improve)
     t_improve = time.perf_counter()
     improved = {}
     if improve:
         # Singular points have keys below 0 (centre vertices the smallest
         # int64, and they move); curve and crease vertices the keys fixed.
         singular_vertex = (vkeys < 0) & (vkeys != np.iinfo(np.int64).min)
-        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed))
+        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed),
+                                                 gradient=grad[0])
     t_improve = time.perf_counter() - t_improve
     # Where two axis skeletons meet (normal along an axis), for reference:
     # the mesh does not use them, so they are found when first asked for.
