@@ -510,7 +510,10 @@ def _newton(surface, p, free_axes, target):
         return p, g, np.where(gg > 0, np.abs(val) * np.sqrt(inv), np.inf)
 
     p, g, res = steps(p, free_axes, max(tol.IMPROVE_NEWTON - 1, 1))
-    more = np.flatnonzero(~(res <= target))
+    # The last step wherever the residual is not yet at rounding level: a
+    # point at 1e-12 of the box where grad F is large (sqrt(x) near x = 0)
+    # still has |F| of 1e-12 and more.
+    more = np.flatnonzero(~(res <= tol.IMPROVE_NEWTON_DONE * target))
     if len(more) and tol.IMPROVE_NEWTON > 1:
         p[:, more], g[:, more], res[more] = steps(p[:, more], free_axes[:, more], 1)
     return p, g, res

@@ -572,6 +572,11 @@ IMPROVE_STEP = 0.5
 #: others (sphere: none of 1080 points; tanglecube: 1043 of 4441).
 IMPROVE_NEWTON = 3
 
+#: After IMPROVE_NEWTON - 1 steps, the points whose residual is above this
+#: fraction of IMPROVE_RESIDUAL take the last step (at 1 the vertices next
+#: to a domain edge, where grad F is large, kept |F| of 3e-12).
+IMPROVE_NEWTON_DONE = 1e-3
+
 #: A moved vertex stays only if |F| / |grad F| there is below this
 #: fraction of the box (the mesh promises 1e-10: a 100-fold margin) ...
 IMPROVE_RESIDUAL = 1e-12
