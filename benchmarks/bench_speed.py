@@ -77,6 +77,13 @@ def timed(fn):
     return time.perf_counter() - w, time.process_time() - c, out
 
 
+def medians(fn, repeat: int):
+    """(median wall seconds, median CPU seconds, last result) of ``repeat`` calls after a warm-up call."""
+    fn()
+    runs = [timed(fn) for _ in range(repeat)]
+    return statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs), runs[-1][2]
+
+
 def compare(repeat: int, res: int) -> None:
     print(f"1. singmesh (defaults) against marching cubes {res}^3 with sampling; medians of {repeat}, alternating")
     print(f"{'surface':11s} {'singmesh wall':>13s} {'cpu':>7s} {'mc wall':>8s} {'cpu':>7s} "
@@ -102,11 +109,7 @@ def by_coarse(repeat: int) -> None:
           f"{'per 1000 leaves':>15s}")
     for name, text, box, _ in SURFACES:
         for coarse in (16, 32, 64, 128):
-            singmesh.mesh(text, box, coarse=coarse)
-            runs = [timed(lambda: singmesh.mesh(text, box, coarse=coarse)) for _ in range(max(1, repeat // 2))]
-            w = statistics.median(r[0] for r in runs)
-            c = statistics.median(r[1] for r in runs)
-            m = runs[-1][2]
+            w, c, m = medians(lambda: singmesh.mesh(text, box, coarse=coarse), max(1, repeat // 2))
             leaves = m.stats["leaves"]
             print(f"{name:11s} {coarse:6d} {w:6.3f}s {c:6.3f}s {leaves:7d} {len(m.vertices):8d} "
                   f"{1e6 * c / max(leaves, 1):13.2f}ms", flush=True)
@@ -119,11 +122,7 @@ def by_nodes(repeat: int) -> None:
     table = {**nodes.SURFACES, **nodes.LARGE}
     for key in NODAL:
         s = table[key]
-        singmesh.mesh(s.text, s.box)
-        runs = [timed(lambda: singmesh.mesh(s.text, s.box)) for _ in range(max(1, repeat // 2))]
-        w = statistics.median(r[0] for r in runs)
-        c = statistics.median(r[1] for r in runs)
-        m = runs[-1][2]
+        w, c, m = medians(lambda: singmesh.mesh(s.text, s.box), max(1, repeat // 2))
         print(f"{s.name:15s} {s.expected:5d} {len(m.singularities):5d} {w:6.3f}s {c:6.3f}s "
               f"{1000 * c / s.expected:7.2f}ms {m.stats['singular_search_time']:11.3f}s {m.stats['leaves']:7d}",
               flush=True)

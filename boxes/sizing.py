@@ -24,10 +24,46 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.errors import SurfaceError
 from singmesh.curvature import curvatures
 
 #: The centre and the eight corners of a box, in units of its side.
 _SAMPLES = np.vstack([[0.5, 0.5, 0.5], np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T])
+
+
+def sizing_levels(size: str, min_edge, max_edge, chord, fine_level: int) -> tuple[int, int, float] | None:
+    """(coarse level, smallest-edge level, chord) of ``size="curvature"``; None for ``"uniform"``.
+
+    Raises
+    ------
+    SurfaceError
+        An unknown ``size``, limits given without ``size="curvature"``, or
+        limits that are not numbers in (0, 1] in order.
+    """
+    if size == "uniform":
+        given = [n for n, v in (("min_edge", min_edge), ("max_edge", max_edge), ("chord", chord)) if v is not None]
+        if given:
+            raise SurfaceError(f"{', '.join(given)} go(es) with size='curvature', not size='uniform'")
+        return None
+    if size != "curvature":
+        raise SurfaceError(f"size must be 'uniform' or 'curvature', not {size!r}")
+    values = {"min_edge": 1.0 / (1 << fine_level) if min_edge is None else min_edge,
+              "max_edge": tol.SIZING_MAX_EDGE if max_edge is None else max_edge,
+              "chord": tol.SIZING_CHORD if chord is None else chord}
+    for name, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(v) or not 0 < v <= 1:
+            raise SurfaceError(f"{name} is a fraction of the box's longest side in (0, 1], not {v!r}")
+    if values["min_edge"] > values["max_edge"]:
+        raise SurfaceError(f"min_edge ({values['min_edge']:g}) is larger than max_edge ({values['max_edge']:g})")
+    # Boxes halve level by level: no box longer than max_edge, none split
+    # below min_edge (a tiny slack: 1/8 is level 3, not 4 by rounding).
+    coarse_level = max(0, int(np.ceil(np.log2(1.0 / values["max_edge"]) - 1e-9)))
+    min_level = max(coarse_level, int(np.floor(np.log2(1.0 / values["min_edge"]) + 1e-9)))
+    if min_level > fine_level:
+        raise SurfaceError(f"min_edge = {values['min_edge']:g} is below the finest boxes (1/fine = "
+                           f"{1 / (1 << fine_level):g}): raise fine or min_edge")
+    return coarse_level, min_level, float(values["chord"])
 
 
 @dataclass

@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.facets.triangulate import edge_keys
 
 # Coordinates are kept as (3, n) arrays (one row per axis): gathers and
 # products of rows cost a third of those of (n, 3) rows for the few
@@ -180,7 +181,7 @@ class _State:
         self.prev = h.reshape(-1, 3)[:, [2, 0, 1]].ravel()
         u = f.ravel()
         w = u[self.next]
-        key = np.minimum(u, w) * nv + np.maximum(u, w)
+        key = edge_keys(u, w, nv)
         order = np.argsort(key, kind="stable")
         ks = key[order]
         start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
@@ -191,7 +192,7 @@ class _State:
         self.twin = np.full(m, -1, np.int64)
         self.twin[h1[ok]] = h2[ok]
         self.twin[h2[ok]] = h1[ok]
-        #: Sorted keys ``min * nv + max`` of the edges of the input (those
+        #: Sorted keys (:func:`edge_keys`) of the edges of the input (those
         #: still there: ``alive``) and of the edges flips made (``extra``,
         #: few: sorting them is cheap where re-sorting all keys is not).
         self.keys = ks[start]
@@ -294,7 +295,7 @@ class _State:
         ok = (c != d) & ~apex[a] & ~apex[b] & ~apex[c] & ~apex[d]
         ok &= ~(curve[a] & curve[b]) & ~(curve[c] & curve[d])
         # The new edge c-d must not exist already.
-        new = np.minimum(c, d) * nv + np.maximum(c, d)
+        new = edge_keys(c, d, nv)
         ok &= ~self._exists(new)
         h, h2, a, b, c, d, new = h[ok], h2[ok], a[ok], b[ok], c[ok], d[ok], new[ok]
         if len(h) == 0:
@@ -351,7 +352,7 @@ class _State:
         self.twin = out
         f[t1] = np.stack([a, d, c], axis=1)
         f[t2] = np.stack([b, c, d], axis=1)
-        self._replace(np.minimum(a, b) * nv + np.maximum(a, b), new)
+        self._replace(edge_keys(a, b, nv), new)
         self._faces(np.concatenate([t1, t2]))
         return len(h), dirty
 

@@ -20,8 +20,8 @@ from .stars import stray_cycles
 from .tubes import tube_triangles
 
 
-def point_key(i: int) -> int:
-    """Vertex key of singular point i: below all event keys (which are >= 0)."""
+def point_key(i):
+    """Vertex key of singular point i (an int or an array of them): below all event keys (which are >= 0)."""
     return -1 - i
 
 

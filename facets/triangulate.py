@@ -189,15 +189,15 @@ def _duplicated(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return uniq[counts > 1]
 
 
-def _edge_keys(a: np.ndarray, b: np.ndarray, n_vertices: int) -> np.ndarray:
+def edge_keys(a: np.ndarray, b: np.ndarray, n_vertices: int) -> np.ndarray:
     """One int64 per unordered vertex pair."""
     a, b = np.minimum(a, b).astype(np.int64), np.maximum(a, b).astype(np.int64)
     return a * max(int(n_vertices), 1) + b
 
 
 def _crowded_edges(faces: np.ndarray, n_vertices: int) -> np.ndarray:
-    """Keys (:func:`_edge_keys`) of the edges of more than two triangles."""
-    keys = _edge_keys(faces, np.roll(faces, -1, axis=1), n_vertices).ravel()
+    """Keys (:func:`edge_keys`) of the edges of more than two triangles."""
+    keys = edge_keys(faces, np.roll(faces, -1, axis=1), n_vertices).ravel()
     uniq, counts = np.unique(keys, return_counts=True)
     return uniq[counts > 2]
 
@@ -232,7 +232,7 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
 
     Triangles in ``forbidden`` (keys of :func:`_triple_keys`), and those
     with a diagonal of the polygon in ``forbidden_edges`` (keys of
-    :func:`_edge_keys`), count as worst.
+    :func:`edge_keys`), count as worst.
     """
     n = poly.shape[1]
     templates = polygon_triangulations(n)
@@ -246,7 +246,7 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
         ends = combos[:, [[0, 1], [1, 2], [0, 2]]]                       # (C, 3, 2) local
         gap = ends[..., 1] - ends[..., 0]
         diagonal = (gap != 1) & (gap != n - 1)                           # (C, 3)
-        keys = _edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
+        keys = edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
         bad = (np.isin(keys, forbidden_edges) & diagonal[None]).any(axis=2)
         q = np.where(bad, -2.0, q)
     score = q[:, tmpl_idx].min(axis=2)  # (P, T)

@@ -14,7 +14,7 @@ from threadpoolctl import ThreadpoolController
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links, leaf_sides
 from singmesh.boxes.octree import refine_stars, subdivide
-from singmesh.boxes.sizing import CurvatureSizing
+from singmesh.boxes.sizing import CurvatureSizing, sizing_levels
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, point_key
@@ -154,41 +154,6 @@ def _one_blas_thread():
     return _BLAS[0].limit(limits=1, user_api="blas")
 
 
-def _sizing_levels(size: str, min_edge, max_edge, chord, fine_level: int) -> tuple[int, int, float] | None:
-    """(coarse level, smallest-edge level, chord) of ``size="curvature"``; None for ``"uniform"``.
-
-    Raises
-    ------
-    SurfaceError
-        An unknown ``size``, limits given without ``size="curvature"``, or
-        limits that are not numbers in (0, 1] in order.
-    """
-    if size == "uniform":
-        given = [n for n, v in (("min_edge", min_edge), ("max_edge", max_edge), ("chord", chord)) if v is not None]
-        if given:
-            raise SurfaceError(f"{', '.join(given)} go(es) with size='curvature', not size='uniform'")
-        return None
-    if size != "curvature":
-        raise SurfaceError(f"size must be 'uniform' or 'curvature', not {size!r}")
-    values = {"min_edge": 1.0 / (1 << fine_level) if min_edge is None else min_edge,
-              "max_edge": tol.SIZING_MAX_EDGE if max_edge is None else max_edge,
-              "chord": tol.SIZING_CHORD if chord is None else chord}
-    for name, v in values.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
-                or not np.isfinite(v) or not 0 < v <= 1:
-            raise SurfaceError(f"{name} is a fraction of the box's longest side in (0, 1], not {v!r}")
-    if values["min_edge"] > values["max_edge"]:
-        raise SurfaceError(f"min_edge ({values['min_edge']:g}) is larger than max_edge ({values['max_edge']:g})")
-    # Boxes halve level by level: no box longer than max_edge, none split
-    # below min_edge (a tiny slack: 1/8 is level 3, not 4 by rounding).
-    coarse_level = max(0, int(np.ceil(np.log2(1.0 / values["max_edge"]) - 1e-9)))
-    min_level = max(coarse_level, int(np.floor(np.log2(1.0 / values["min_edge"]) + 1e-9)))
-    if min_level > fine_level:
-        raise SurfaceError(f"min_edge = {values['min_edge']:g} is below the finest boxes (1/fine = "
-                           f"{1 / (1 << fine_level):g}): raise fine or min_edge")
-    return coarse_level, min_level, float(values["chord"])
-
-
 def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
           sizing=("uniform", None, None, None)) -> Mesh:
     """:func:`mesh` itself."""
@@ -201,7 +166,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     fine_level = _level(fine, "fine")
     if fine_level < coarse_level:
         raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
-    levels = _sizing_levels(*sizing, fine_level)
+    levels = sizing_levels(*sizing, fine_level)
     if levels is not None:
         coarse_level = levels[0]
 
@@ -308,9 +273,9 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     t_improve = time.perf_counter()
     improved = {}
     if improve:
-        # Singular points have keys below 0 (centre vertices the smallest
-        # int64, and they move); curve and crease vertices the keys fixed.
-        singular_vertex = (vkeys < 0) & (vkeys != np.iinfo(np.int64).min)
+        # The singular points' vertices stay, as do the curve and crease
+        # vertices (the keys fixed).
+        singular_vertex = np.isin(vkeys, point_key(np.arange(len(points))))
         vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed),
                                                  gradient=grad[0])
     t_improve = time.perf_counter() - t_improve

@@ -57,7 +57,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.intervals import Graph, interval_eval, kink_key, kink_pieces, point_eval
 from singmesh.errors import SurfaceError
 from singmesh.jets import graph_jets, jet_space
-from singmesh.surface import CreaseSystem, Surface, TipSystem, check_variables
+from singmesh.surface import CreaseSystem, Surface, TipSystem, check_variables, polynomial_fraction
 from singmesh.syntax import read_equation
 
 _EPS = float(np.finfo(float).eps)
@@ -592,16 +592,12 @@ class ElementarySurface(Surface):
         # with float coefficients runs for many minutes (heuristic gcds of
         # huge expressions), and their denominators have no zeros anyway.
         # Other poles (tan, 1/sin) keep the documented gap of a cell.
-        if not self.expr.is_rational_function(*sorted(self.expr.free_symbols, key=str)):
+        # N, D coprime (sympy's cancel): a common factor (x^2 - y^2 over
+        # x - y) would make N = D = 0 a surface, not a line.
+        fraction = polynomial_fraction(self.expr)
+        if fraction is None or not fraction[0].free_symbols:
             return None
-        try:
-            # cancel: a common factor of N and D (x^2 - y^2 over x - y) would
-            # make N = D = 0 a surface, not a line.
-            num, den = sympy.fraction(sympy.cancel(sympy.together(self.expr)))
-        except (TypeError, ValueError):  # pragma: no cover - sympy cannot combine it
-            return None
-        if not den.free_symbols or not num.free_symbols:
-            return None
+        num, den = fraction
         g = self._graph
         try:
             n, d = g.from_sympy(num), g.from_sympy(den)

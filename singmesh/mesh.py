@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from . import topology
 from .surface import Surface
@@ -23,6 +24,7 @@ CURVATURE_FORMATS = ("ply", "vtk", "vtu", "xdmf", "gmsh")
 
 #: The names of the curvature arrays in files.
 CURVATURE_NAMES = ("gaussian_curvature", "mean_curvature", "k1", "k2")
+
 #: Triangles with a vertex nearer than this (fraction of the box's largest
 #: side) to a singular point or curve are left out of the angle statistics
 #: "away from singular" of the report (issue #12's rule).
@@ -262,8 +264,6 @@ class Mesh:
         centres = np.concatenate(centres)
         if len(centres) == 0:
             return np.ones(len(f), bool)
-        from scipy.spatial import cKDTree
-
         size = float(np.max(self.box[:, 1] - self.box[:, 0]))
         near = cKDTree(centres).query(self.vertices, distance_upper_bound=reach * size)[0] <= reach * size
         return ~near[f].any(axis=1)

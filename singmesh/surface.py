@@ -206,7 +206,7 @@ class Surface(abc.ABC):
             )
         if _is_polynomial(expr):
             return PolynomialSurface._from_expr(expr, text, values, rounding)
-        fraction = _polynomial_fraction(expr)
+        fraction = polynomial_fraction(expr)
         if fraction is not None:
             # F = N / D: F = 0 is N = 0 off D = 0, and its closure is N = 0
             # (N, D coprime meet in a curve at most): the polynomial path
@@ -636,7 +636,7 @@ def check_variables(expr: sympy.Expr) -> None:
         )
 
 
-def _polynomial_fraction(expr: sympy.Expr):
+def polynomial_fraction(expr: sympy.Expr):
     """(N, D), coprime polynomials with F = N / D, for a rational F that is not a polynomial; else None."""
     if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
         return None
