@@ -404,10 +404,20 @@ def _onto_surface(surface, points: np.ndarray, free: np.ndarray, reach: float):
 
 
 def _signs(surface, tree, lines_rows, pos):
-    """Sign of F + eps (zero counts as +) at positions on lines."""
+    """Sign of F + eps at positions on lines: F zero to its rounding counts as +.
+
+    As at the lattice points (snapped, ``Surface.is_zero``): along a line
+    that lies in the surface (a plane with rational coefficients through
+    lattice lines) F is rounding noise of either sign, and read as is it
+    would make r- and r+ events at random lattice points along it.
+    """
     xyz = np.zeros((len(pos), 3))
     r = np.arange(len(pos))
     xyz[r, lines_rows[:, 0]] = pos
     xyz[r, (lines_rows[:, 0] + 1) % 3] = lines_rows[:, 1]
     xyz[r, (lines_rows[:, 0] + 2) % 3] = lines_rows[:, 2]
-    return np.where(surface(tree.lattice_to_space(xyz)) < 0, -1, 1)
+    points = tree.lattice_to_space(xyz)
+    negative = surface(points) < 0
+    if negative.any():
+        negative[negative] = ~surface.is_zero(points[negative])
+    return np.where(negative, -1, 1)

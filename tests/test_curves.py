@@ -473,3 +473,17 @@ def test_closed_curves_from_a_start_near_a_crossing_are_traced_once():
     assert len(m.faces) < 2.2 * len(m.vertices)
     crossings = [sp for sp in m.special_points if "crossing" in sp.kind]
     assert sorted(np.round(sp.point[0], 6) for sp in crossings) == [-1.0, 1.0]
+
+
+@pytest.mark.parametrize("text", [
+    "(4 y/3 - 5 z + 1)(x^2 + y^2 + z^2 - 0.8)",
+    "(3 x - 7 y/2 + 1/4)(x^2 - y z + z/3 - 1/5)",
+    "(5 x/7 - 3 z/7 + 1/8)(x^3 - 3 x y^2 + z^2 - 1/3)",
+])
+def test_plane_through_lattice_lines_crossing_a_surface(text):
+    # A plane with rational coefficients holds whole lattice lines of the
+    # octree (4y/3 - 5z + 1 = 0 at y = 114/128, z = 56/128 for every x).
+    # Along them F is rounding noise of either sign: read as signs, it
+    # made r- and r+ events at random lattice points there, and the rails
+    # of the tube round the double curve broke (6 to 73 open edges).
+    check_curve_mesh(text, BOX1, 1, half_sheets=4)
