@@ -20,6 +20,7 @@ from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, point_key
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
+from singmesh.facets.bubbles import lattice_specks, without_faces
 from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
@@ -270,6 +271,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)
+    # Closed specks round single lattice points between two sheets closer
+    # than a cell (no critical point of F in them) are not the surface.
+    specks = lattice_specks(vertices, faces, b, float(cell.max()),
+                            np.isin(vkeys, fixed) | np.isin(vkeys, point_key(np.arange(len(points)))),
+                            surf.gradient, surf.hessian)
+    if specks.any():
+        vertices, faces, vkeys, *grad = without_faces(vertices, faces, specks, vkeys, *grad)
     t_improve = time.perf_counter()
     improved = {}
     if improve:
@@ -297,6 +305,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         "broken_boxes": len(cycles.broken_boxes),
         "ambiguous_squares": int(links.ambiguous.sum()),
         "inconsistent_squares": int(links.inconsistent.sum()),
+        "speck_triangles": int(specks.sum()),
         "singular_search_time": t_sing,
         "curve_time": t_curves,
         "singular_locus_not_isolated": bool(overflow or locus_curves),

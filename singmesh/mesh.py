@@ -357,6 +357,10 @@ class Mesh:
             out.append("F has a curve of singular points in the box that could not be traced; "
                        "near it the mesh is not right")
         out += self.crease_warnings()
+        if self.stats.get("speck_triangles"):
+            out.append(f"two sheets of F = 0 come closer than a cell: {self.stats['speck_triangles']} triangles "
+                       "of closed specks between them were dropped (no extremum of F inside); there the mesh "
+                       "is right only to a cell (a larger fine level resolves them)")
         for factor, k in self.stats.get("repeated_factors", []):
             out.append(f"F has the factor ({factor})^{k}: the mesh is of F without the repeated powers "
                        "(a repeated factor does not change sign, so its zeros are all singular)")

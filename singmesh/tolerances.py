@@ -360,6 +360,16 @@ CURVE_DOUBLE_PATH_EDGES = 24
 #: beside it is merged into the special point.
 CURVE_MERGE = 0.3
 
+#: Lattice specks (facets.bubbles): closed pieces of at most BUBBLE_FACES
+#: triangles and BUBBLE_THICKNESS cells across, with no critical point of
+#: F in them (an extremum: Newton on grad F = 0, BUBBLE_NEWTON steps from the centre, to
+#: |grad F| <= BUBBLE_CRITICAL of its scale there), are two sheets closer
+#: than a cell seen at one lattice point, not pieces of the surface.
+BUBBLE_FACES = 200
+BUBBLE_THICKNESS = 2.0
+BUBBLE_NEWTON = 12
+BUBBLE_CRITICAL = 1e-6
+
 #: Around pinch and triple points the non-simple leaves join the tube up
 #: to this many cells away at a fine lattice of CURVE_BALL_FINE cells per
 #: box or coarser.  The sheets meet tangentially there and part only as
