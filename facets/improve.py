@@ -465,10 +465,15 @@ class _State:
         old_p, old_n = P[:, idx], N[:, idx]
         P[:, idx], N[:, idx] = q, new_normal
         undone = 0
+        # The lean of every touched triangle, then of those at the vertices
+        # moved back alone (the others' did not change).
+        redo = np.arange(len(ft))
+        lean = np.empty(len(ft))
         for _ in range(8):
-            now = [np.take(P, ft[:, i], axis=1) for i in range(3)]
-            ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
-            lean = _lean(*now, ref)
+            fr = ft[redo]
+            now = [np.take(P, fr[:, i], axis=1) for i in range(3)]
+            ref = sum(np.take(N, fr[:, i], axis=1) for i in range(3))
+            lean[redo] = _lean(*now, ref)
             back = ft[(lean < bound) | (lean <= 0)].ravel()
             back = np.unique(back[moved[back]])
             if len(back) == 0:
@@ -477,6 +482,9 @@ class _State:
             P[:, back], N[:, back] = old_p[:, k], old_n[:, k]
             moved[back] = False
             undone += len(back)
+            was = np.zeros(nv, bool)
+            was[back] = True
+            redo = np.flatnonzero(was[ft].any(axis=1))
         else:
             # Still not settled: undo every move of this step.
             P[:, idx], N[:, idx] = old_p, old_n
