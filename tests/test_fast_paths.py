@@ -19,7 +19,7 @@ from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
 from singmesh.boxes.octree import subdivide
 from singmesh.facets.assemble import _last_max
-from singmesh.facets.triangulate import _triple_keys
+from singmesh.facets.triangulate import _combos, _template_quality, _triple_keys, triangle_quality
 from singmesh.surface import Surface
 
 from test_rounded import float_rotated
@@ -152,3 +152,36 @@ def test_triple_keys_of_sorted_triples():
     tri[::7, 1] = tri[::7, 0]
     t = np.sort(tri, axis=1)
     assert np.array_equal(_triple_keys(tri, 1000), (t[:, 0] << 42) | (t[:, 1] << 21) | t[:, 2])
+
+
+def _row_quality(p, normal):
+    """Smallest angle of triangles (..., 3, 3) from rows of 3 (norm, einsum, cross), -1 facing away."""
+    e0, e1, e2 = p[..., 1, :] - p[..., 0, :], p[..., 2, :] - p[..., 1, :], p[..., 0, :] - p[..., 2, :]
+    n0, n1, n2 = (np.linalg.norm(e, axis=-1) for e in (e0, e1, e2))
+
+    def angle(a, b, na, nb):
+        return np.arccos(np.clip(np.einsum("...i,...i->...", a, b) / np.maximum(na * nb, 1e-300), -1.0, 1.0))
+
+    ang = np.minimum(np.minimum(angle(e0, -e2, n0, n2), angle(e1, -e0, n1, n0)), angle(e2, -e1, n2, n1))
+    facing = np.einsum("...i,...i->...", np.cross(e0, -e2), normal)
+    return np.where(facing > 0, ang, -1.0)
+
+
+@pytest.mark.parametrize("n", [4, 5, 6, 8])
+def test_template_quality_per_coordinate_is_the_rows(n):
+    """The triangle qualities written per coordinate are those of rows of 3, bit for bit: on
+    float points, slivers (corners 1e-12 apart), triangles facing away and repeated corners."""
+    rng = np.random.default_rng(n)
+    points = rng.normal(size=(400, 3)) @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    points[::5] = points[1::5] + 1e-12 * rng.normal(size=points[1::5].shape)
+    normals = rng.normal(size=(400, 3))
+    poly = rng.integers(0, 400, (300, n))
+    poly[::9, 1] = poly[::9, 0]
+    combos = _combos(n)
+    want = _row_quality(points[poly[:, combos]], normals[poly].sum(axis=1)[:, None, :])
+    got = _template_quality(poly, points, normals)
+    assert (want == -1.0).any() and (want > 0).any()
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
+    p = points[poly[:, :3]]
+    assert np.array_equal(triangle_quality(p, normals[:300]).view(np.int64),
+                          _row_quality(p, normals[:300]).view(np.int64))
