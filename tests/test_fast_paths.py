@@ -19,6 +19,7 @@ from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
 from singmesh.boxes.octree import subdivide
 from singmesh.facets.assemble import _last_max
+from singmesh.facets.flips import area_and_longest
 from singmesh.facets.triangulate import _combos, _template_quality, _triple_keys, triangle_quality
 from singmesh.surface import Surface
 
@@ -185,3 +186,20 @@ def test_template_quality_per_coordinate_is_the_rows(n):
     p = points[poly[:, :3]]
     assert np.array_equal(triangle_quality(p, normals[:300]).view(np.int64),
                           _row_quality(p, normals[:300]).view(np.int64))
+
+
+def test_area_and_longest_per_coordinate_are_the_rows():
+    """Doubled areas and longest sides written per coordinate are those of norm, cross and sum
+    over rows of 3, bit for bit (float points, slivers, repeated corners)."""
+    rng = np.random.default_rng(5)
+    vertices = rng.normal(size=(500, 3)) @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    vertices[::4] = vertices[1::4] + 1e-13 * rng.normal(size=vertices[1::4].shape)
+    faces = rng.integers(0, 500, (2000, 3))
+    faces[::11, 2] = faces[::11, 0]
+    p = vertices[faces]
+    area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    longest = np.max([np.sum((p[:, i] - p[:, (i + 1) % 3]) ** 2, axis=1) for i in range(3)], axis=0)
+    got_area, got_longest = area_and_longest(vertices, faces)
+    assert (area2 == 0).any()
+    assert np.array_equal(got_area.view(np.int64), area2.view(np.int64))
+    assert np.array_equal(got_longest.view(np.int64), longest.view(np.int64))
