@@ -18,6 +18,7 @@ from singmesh.boxes import edges as edges_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
 from singmesh.boxes.octree import subdivide
+from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
 from singmesh.facets.triangulate import _combos, _template_quality, _triple_keys, triangle_quality
@@ -203,3 +204,93 @@ def test_area_and_longest_per_coordinate_are_the_rows():
     assert (area2 == 0).any()
     assert np.array_equal(got_area.view(np.int64), area2.view(np.int64))
     assert np.array_equal(got_longest.view(np.int64), longest.view(np.int64))
+
+
+def _line_polynomials(rng, count):
+    """Polynomials in tau of degree 1..6 with roots where they are hard to tell apart: near +-1,
+    near-double, complex pairs 1e-9..1e-3 off the axis (about ROOT_IMAG), tiny leading terms."""
+    out = []
+    for _ in range(count):
+        n = int(rng.integers(1, 7))
+        roots = rng.uniform(-1.6, 1.6, n).astype(complex)
+        kind = rng.random()
+        if kind < 0.25 and n >= 2:
+            roots[1] = np.conj(roots[0]) if roots[0].imag else roots[0] + 10 ** rng.uniform(-12, -4)
+        if 0.25 <= kind < 0.5 and n >= 2:
+            roots[0] = roots[0].real + 1j * 10 ** rng.uniform(-9, -3)
+            roots[1] = np.conj(roots[0])
+        if 0.5 <= kind < 0.6:
+            roots[0] = rng.choice([-1.0, 1.0]) * (1 + rng.choice([0.0, 1e-15, -1e-15, 1e-9]))
+        c = np.real(np.polynomial.polynomial.polyfromroots(roots)) * 10 ** rng.uniform(-6, 6)
+        if rng.random() < 0.1:
+            c[-1] *= 1e-11
+        out.append(np.concatenate([c, np.zeros(7 - len(c))]))
+    return np.array(out)
+
+
+def test_line_roots_without_root_free_lines_are_all_roots(monkeypatch):
+    """Lines proven free of roots to keep (Bernstein hulls on pieces of the segment) skip the
+    eigenvalues: the roots are those of all lines' eigenvalues, bit for bit, on hard polynomials
+    and on the lines of a float-rotated surface."""
+    rng = np.random.default_rng(6)
+    polys = [_line_polynomials(rng, 3000)]
+    surface = Surface.parse(float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0])
+    tree = subdivide(surface, BOX, 3, 5)
+    cap = []
+    real = polynomial_lines.real_roots
+    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b: cap.append(p) or real(p, b))
+    compute_events(surface, tree)
+    monkeypatch.setattr(polynomial_lines, "real_roots", real)
+    polys += cap
+    skipped = 0
+    for p in polys:
+        got = real(p, 1.0)
+        skipped += sum(int(polynomial_lines._far_from_zero(p[np.abs(p[:, d]) > 0, :d + 1]).sum()) for d in range(3, p.shape[1]))
+        with monkeypatch.context() as m:
+            m.setattr(polynomial_lines, "_far_from_zero", lambda q: np.zeros(len(q), bool))
+            want = real(p, 1.0)
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1].view(np.int64), want[1].view(np.int64))
+    assert skipped > 100
+
+
+def test_newton_polish_stops_at_fixed_points():
+    """real_roots' Newton polish on the roots still moving only gives the roots of all
+    NEWTON_ITERATIONS steps on all of them, bit for bit."""
+    rng = np.random.default_rng(7)
+    polys = _line_polynomials(rng, 2000)
+    row, root = polynomial_lines.real_roots(polys, 1.0)
+    # The same eigenvalues, polished the plain way.
+    seen = []
+    orig = polynomial_lines._horner
+    try:
+        polynomial_lines._horner = lambda c, t: seen.append(len(t)) or orig(c, t)
+        polynomial_lines.real_roots(polys, 1.0)
+    finally:
+        polynomial_lines._horner = orig
+    assert len(seen) < 2 * tol.NEWTON_ITERATIONS or min(seen) < max(seen)  # the shortcut is taken
+    start = _eigen_roots(polys, row)
+    coeffs = polys[row]
+    for _ in range(tol.NEWTON_ITERATIONS):
+        p, dp = orig(coeffs, start)
+        ok = np.abs(dp) > 0
+        trial = start - np.where(ok, p / np.where(ok, dp, 1.0), 0.0)
+        start = np.where(np.abs(orig(coeffs, trial)[0]) <= np.abs(p), trial, start)
+    assert np.array_equal(root.view(np.int64), start.view(np.int64))
+
+
+def _eigen_roots(polys, row):
+    """The unpolished roots real_roots starts from, in its order (rows ``row``)."""
+    orig = polynomial_lines._horner
+    starts = []
+
+    def first(c, t):
+        if not starts:
+            starts.append(t.copy())
+        return orig(c, t)
+    try:
+        polynomial_lines._horner = first
+        polynomial_lines.real_roots(polys, 1.0)
+    finally:
+        polynomial_lines._horner = orig
+    assert len(starts[0]) == len(row)
+    return starts[0]
