@@ -294,3 +294,37 @@ def _eigen_roots(polys, row):
         polynomial_lines._horner = orig
     assert len(starts[0]) == len(row)
     return starts[0]
+
+
+def _plain_jet(T, tol, order):
+    """The jet text term by term (the loop over monomials _format_jet's table replaces)."""
+    terms = []
+    for total in range(2, order + 1):
+        for i in range(total, -1, -1):
+            for j in range(total - i, -1, -1):
+                k = total - i - j
+                if max(i, j, k) >= T.shape[0] or abs(float(T[i, j, k])) <= tol:
+                    continue
+                c = float(T[i, j, k])
+                mono = " ".join(v if e == 1 else f"{v}^{e}" for v, e in (("x", i), ("y", j), ("z", k)) if e)
+                terms.append(("-" if c < 0 else "+", ("" if abs(abs(c) - 1.0) <= 1e-9 else f"{abs(c):.6g} ") + mono))
+    if not terms:
+        return "0"
+    return ("-" if terms[0][0] == "-" else "") + terms[0][1] + "".join(f" {s} {t}" for s, t in terms[1:])
+
+
+def test_jet_text_and_hessian_from_tables():
+    """classify's jet text and Hessian read through index tables: as term by term."""
+    from singmesh.skeleton import classify
+
+    rng = np.random.default_rng(8)
+    for n in (1, 2, 3, 4, 7):
+        for _ in range(100):
+            T = rng.normal(size=(n, n, n)) * (rng.random((n, n, n)) < 0.5)
+            T[rng.random((n, n, n)) < 0.1] = rng.choice([-1.0, 1.0])
+            for order in (2, 3, 4):
+                assert classify._format_jet(T, 0.3, order) == _plain_jet(T, 0.3, order)
+            if n >= 3:
+                want = [[T[tuple(np.eye(3, dtype=int)[a] + np.eye(3, dtype=int)[b])] * (2.0 if a == b else 1.0)
+                         for b in range(3)] for a in range(3)]
+                assert np.array_equal(T[classify._HESSIAN_INDEX] * classify._HESSIAN_FACTOR, np.array(want))
