@@ -328,3 +328,26 @@ def test_jet_text_and_hessian_from_tables():
                 want = [[T[tuple(np.eye(3, dtype=int)[a] + np.eye(3, dtype=int)[b])] * (2.0 if a == b else 1.0)
                          for b in range(3)] for a in range(3)]
                 assert np.array_equal(T[classify._HESSIAN_INDEX] * classify._HESSIAN_FACTOR, np.array(want))
+
+
+def test_face_modes_with_faces_along_rows_are_the_sign_tests():
+    """face_modes' sign tests on faces laid along the last axis: those of bernstein.sign_definite on each
+    face's differences (exact zeros, constant rows, NaN, a variable of degree 0)."""
+    from singmesh.boxes.bernstein import sign_definite
+    from singmesh.boxes.polynomial_bounds import face_modes
+
+    rng = np.random.default_rng(9)
+    for shape in [(400, 4, 4, 4), (400, 3, 1, 3), (400, 2, 2, 2)]:
+        t = np.round(rng.normal(size=shape), 1)
+        t[::5] = np.cumsum(np.abs(t[::5]), axis=2)          # monotone along z
+        t[1::7] = 0.0
+        t[2::11, 0, 0, 0] = np.nan
+        for n in range(3):
+            side = rng.integers(0, 2, len(t))
+            face = np.stack([np.take(t[i], -side[i], axis=n) for i in range(len(t))])
+            if n == 1:
+                face = np.swapaxes(face, 1, 2)
+            over_u = sign_definite(np.diff(face, axis=2), (1, 2))
+            over_v = sign_definite(np.diff(face, axis=1), (1, 2))
+            want = np.where(over_u, 0, np.where(over_v, 1, 2))
+            assert np.array_equal(face_modes(t, n, side), want)
