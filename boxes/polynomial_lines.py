@@ -60,10 +60,12 @@ def line_polynomials(coeffs: np.ndarray, axis: int, fixed: np.ndarray) -> np.nda
 def _rescale(poly: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
     """Coefficients in tau where s = centre + half * tau (rows independent)."""
     n = poly.shape[1] - 1
-    i = np.arange(n + 1)[None, :, None]
-    j = np.arange(n + 1)[None, None, :]
-    # coefficient of tau^j: sum_i c_i C(i, j) centre^(i-j) half^j
-    m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
+    i = np.arange(n + 1)[:, None]
+    j = np.arange(n + 1)[None, :]
+    # coefficient of tau^j: sum_i c_i C(i, j) centre^(i-j) half^j; the
+    # n + 1 powers of each centre once (not one per (i, j)), the same values.
+    powers = centre[:, None] ** np.arange(n + 1)
+    m = np.where(i >= j, comb(i, j) * powers[:, np.maximum(i - j, 0)], 0.0)
     out = np.einsum("li,lij->lj", poly, m)
     return out * half[:, None] ** np.arange(n + 1)
 

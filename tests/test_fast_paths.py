@@ -351,3 +351,20 @@ def test_face_modes_with_faces_along_rows_are_the_sign_tests():
             over_v = sign_definite(np.diff(face, axis=1), (1, 2))
             want = np.where(over_u, 0, np.where(over_v, 1, 2))
             assert np.array_equal(face_modes(t, n, side), want)
+
+
+def test_rescaled_line_polynomials_with_each_power_once():
+    """_rescale reads centre^(i - j) from one table of powers per centre: the coefficients are
+    those of a power per (i, j), bit for bit (centres 0, negative, 15-digit decimals)."""
+    from scipy.special import comb
+
+    rng = np.random.default_rng(10)
+    for n in range(0, 7):
+        poly = rng.normal(size=(500, n + 1))
+        centre = np.round(rng.uniform(-3, 3, 500), 15)
+        centre[::5] = 0.0
+        half = rng.uniform(0.01, 1, 500)
+        i, j = np.arange(n + 1)[None, :, None], np.arange(n + 1)[None, None, :]
+        m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
+        want = np.einsum("li,lij->lj", poly, m) * half[:, None] ** np.arange(n + 1)
+        assert np.array_equal(polynomial_lines._rescale(poly, centre, half).view(np.int64), want.view(np.int64))
