@@ -368,3 +368,29 @@ def test_rescaled_line_polynomials_with_each_power_once():
         m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
         want = np.einsum("li,lij->lj", poly, m) * half[:, None] ** np.arange(n + 1)
         assert np.array_equal(polynomial_lines._rescale(poly, centre, half).view(np.int64), want.view(np.int64))
+
+
+def test_side_signs_read_each_midpoint_once(tree_of, monkeypatch):
+    """The signs left and right of every root, F read once per midpoint between two roots:
+    those of the two plain evaluations (left samples, right samples), on the surfaces' own roots."""
+    surface, tree = tree_of
+    seen = {}
+    real = edges_mod._events_from_roots
+
+    def grab(surface, tree, lines, uniq, line_of, pos, snap):
+        seen.update(lines=lines, line_of=line_of, pos=pos)
+        return real(surface, tree, lines, uniq, line_of, pos, snap)
+    monkeypatch.setattr(edges_mod, "_events_from_roots", grab)
+    compute_events(surface, tree)
+    lines, line_of, pos = seen["lines"], seen["line_of"], seen["pos"]
+    assert len(pos) > 10 and (line_of[1:] == line_of[:-1]).any()
+    same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])
+    same_next = np.concatenate([line_of[:-1] == line_of[1:], [False]])
+    prev = np.where(same_prev, np.roll(pos, 1), pos - 1.0)
+    nxt = np.where(same_next, np.roll(pos, -1), pos + 1.0)
+    want_left = edges_mod._signs(surface, tree, lines[line_of], (pos + prev) / 2)
+    want_right = edges_mod._signs(surface, tree, lines[line_of], (pos + nxt) / 2)
+    left, right = edges_mod._side_signs(surface, tree, lines, line_of, pos)
+    assert np.array_equal(left, want_left) and np.array_equal(right, want_right)
+    empty = edges_mod._side_signs(surface, tree, lines, line_of[:0], pos[:0])
+    assert len(empty[0]) == 0 and len(empty[1]) == 0
