@@ -394,3 +394,19 @@ def test_side_signs_read_each_midpoint_once(tree_of, monkeypatch):
     assert np.array_equal(left, want_left) and np.array_equal(right, want_right)
     empty = edges_mod._side_signs(surface, tree, lines, line_of[:0], pos[:0])
     assert len(empty[0]) == 0 and len(empty[1]) == 0
+
+
+def test_is_zero_skips_the_term_sizes_only_where_no_value_is_small():
+    """A polynomial's is_zero reads the sum of |terms| only when some |F| is under its bound: the
+    answer is Surface.is_zero's, with zeros at lattice points, near-zeros and none."""
+    from singmesh.surface import Surface as Base
+
+    rng = np.random.default_rng(11)
+    for text in ["4(x^2+y^2+z^2) + 16 x y z - 1", "x^2 - y^2 z", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0],
+                 "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8"]:
+        s = Surface.parse(text)
+        lattice = np.stack(np.meshgrid(*[np.linspace(-2, 2, 17)] * 3, indexing="ij"), -1).reshape(-1, 3)
+        for pts in [lattice, rng.uniform(-3, 3, (500, 3)), lattice[:1], np.zeros((0, 3)), np.array([[0.0, 0.0, 0.0], [0.5, 0.5, -0.5]])]:
+            assert np.array_equal(s.is_zero(pts), Base.is_zero(s, pts))
+    cayley = Surface.parse("4(x^2+y^2+z^2) + 16 x y z - 1")
+    assert cayley.is_zero(np.array([[0.5, 0.5, -0.5], [0.5, 0.5, 0.5]])).tolist() == [True, False]
