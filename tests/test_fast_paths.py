@@ -410,3 +410,9 @@ def test_is_zero_skips_the_term_sizes_only_where_no_value_is_small():
             assert np.array_equal(s.is_zero(pts), Base.is_zero(s, pts))
     cayley = Surface.parse("4(x^2+y^2+z^2) + 16 x y z - 1")
     assert cayley.is_zero(np.array([[0.5, 0.5, -0.5], [0.5, 0.5, 0.5]])).tolist() == [True, False]
+    # On the sphere to rounding: |F| of an ulp or two, not 0, and zero to is_zero.
+    sphere = Surface.parse("x^2 + y^2 + z^2 - 1")
+    on = rng.normal(size=(300, 3))
+    on /= np.linalg.norm(on, axis=1)[:, None]
+    on = on[sphere(on) != 0]
+    assert len(on) > 50 and sphere.is_zero(on).all()
