@@ -221,7 +221,11 @@ def _crowded_edges(faces: np.ndarray, n_vertices: int) -> np.ndarray:
 def _template_quality(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """Quality (:func:`triangle_quality`) of every triangle of the polygons' vertices: (P, C(n, 3))."""
     combos = _combos(poly.shape[1])
-    normal = normals[poly].sum(axis=1)
+    # The vertices' normals summed in order (what .sum(axis=1) of the
+    # (P, n, 3) gather adds, one vertex after the other: the same bits).
+    normal = normals[poly[:, 0]] + normals[poly[:, 1]]
+    for k in range(2, poly.shape[1]):
+        normal += normals[poly[:, k]]
     # Gathered per coordinate, (P, n) then (P, C): a third of the index work
     # of the (P, C, 3, 3) corner table.
     xyz = [np.ascontiguousarray(points[:, a])[poly] for a in range(3)]
@@ -269,7 +273,11 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
         keys = edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
         bad = (np.isin(keys, forbidden_edges) & diagonal[None]).any(axis=2)
         q = np.where(bad, -2.0, q)
-    score = q[:, tmpl_idx].min(axis=2)  # (P, T)
+    # The smallest quality of each template's triangles (P, T): exact, as
+    # q[:, tmpl_idx].min(axis=2), without a reduction call per (P, T) row.
+    score = q[:, tmpl_idx[:, 0]]
+    for k in range(1, tmpl_idx.shape[1]):
+        score = np.minimum(score, q[:, tmpl_idx[:, k]])
     best = np.argmax(score, axis=1)
     tri_local = templates[best]  # (P, n-2, 3)
     return np.take_along_axis(poly[:, None, :], tri_local.reshape(len(poly), -1)[:, None, :], axis=2) \

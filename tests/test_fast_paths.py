@@ -21,7 +21,8 @@ from singmesh.boxes.octree import subdivide
 from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
-from singmesh.facets.triangulate import _combos, _template_quality, _triple_keys, triangle_quality
+from singmesh.facets.triangulate import (_choose_template, _combos, _template_combos, _template_quality, _triple_keys,
+                                        polygon_triangulations, triangle_quality)
 from singmesh.surface import Surface
 
 from test_rounded import float_rotated
@@ -416,3 +417,18 @@ def test_is_zero_skips_the_term_sizes_only_where_no_value_is_small():
     on /= np.linalg.norm(on, axis=1)[:, None]
     on = on[sphere(on) != 0]
     assert len(on) > 50 and sphere.is_zero(on).all()
+
+
+@pytest.mark.parametrize("n", [4, 5, 6, 8])
+def test_best_template_by_columns_is_by_rows(n):
+    """The template whose worst triangle is best, its worst read column by column: the choice of
+    q[:, templates].min(axis=2) and argmax (ties, -1 and -2 qualities, NaN)."""
+    rng = np.random.default_rng(12 + n)
+    poly = rng.integers(0, 1000, (500, n))
+    q = np.round(rng.random((500, len(_combos(n)))), 1)
+    q[rng.random(q.shape) < 0.05] = -1.0
+    q[::17, 0] = np.nan
+    best = np.argmax(q[:, _template_combos(n)].min(axis=2), axis=1)
+    tri = polygon_triangulations(n)[best]
+    want = np.take_along_axis(poly[:, None, :], tri.reshape(len(poly), -1)[:, None, :], axis=2).reshape(-1, 3)
+    assert np.array_equal(_choose_template(poly, q), want)
