@@ -510,7 +510,9 @@ class PolynomialSurface(Surface):
         p = np.asarray(points, dtype=float)
         v = self(p)
         eps = ZERO_ULPS * np.finfo(float).eps
-        reach = np.maximum(np.abs(p).max(axis=-1, initial=0.0), 1.0) if p.size else np.zeros(p.shape[:-1])
+        # max(1, |x|, |y|, |z|) per point (not a reduction along the axis of 3: a call per point)
+        a = np.abs(p)
+        reach = np.maximum(np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2]), 1.0)
         bound = 2.0 * float(np.abs(self.coeffs).sum()) * reach ** self.degree
         if not (np.abs(v) <= eps * bound).any():
             return np.zeros(v.shape, bool)
@@ -527,8 +529,11 @@ class PolynomialSurface(Surface):
 
     @property
     def scale(self) -> float:
-        """The largest |coefficient|."""
-        return float(np.abs(self.coeffs).max())
+        """The largest |coefficient| (cached)."""
+        cache = self.__dict__.setdefault("_cache", {})
+        if "scale" not in cache:
+            cache["scale"] = float(np.abs(self.coeffs).max())
+        return cache["scale"]
 
     def taylor(self, point, order: int | None = None) -> np.ndarray:
         """Taylor coefficients at ``point``: exact up to rounding at the default order (the degree)."""
