@@ -432,3 +432,22 @@ def test_best_template_by_columns_is_by_rows(n):
     tri = polygon_triangulations(n)[best]
     want = np.take_along_axis(poly[:, None, :], tri.reshape(len(poly), -1)[:, None, :], axis=2).reshape(-1, 3)
     assert np.array_equal(_choose_template(poly, q), want)
+
+
+def test_faces_without_loops_along_rows_are_the_sign_tests():
+    """face_without_loops with the faces laid along the last axis: the plain tests per face
+    (tangential differences of one sign, or no sign change), with ties, NaN, a side of one
+    coefficient and no face at all."""
+    from singmesh.boxes.bernstein import sign_definite
+    from singmesh.boxes.polynomial_bounds import face_without_loops
+
+    rng = np.random.default_rng(14)
+    for shape in [(600, 5, 5), (600, 3, 1), (600, 2, 2), (0, 4, 4)]:
+        face = np.round(rng.normal(size=shape), 1)
+        face[::4] = np.abs(face[::4])
+        face[1::6] = np.cumsum(np.abs(face[1::6]), axis=1)
+        if len(face):
+            face[2::9, 0, 0] = np.nan
+        want = (sign_definite(np.diff(face, axis=1), (1, 2)) | sign_definite(np.diff(face, axis=2), (1, 2))
+                | (face.min(axis=(1, 2), initial=np.inf) >= 0) | (face.max(axis=(1, 2), initial=-np.inf) < 0))
+        assert np.array_equal(face_without_loops(face), want)
