@@ -152,8 +152,8 @@ def _far_from_zero(poly: np.ndarray) -> np.ndarray:
     A kept root z = a + ib (|a| <= 1, |b| <= ``ROOT_IMAG``) computed as an
     eigenvalue of the companion matrix is an exact root of a polynomial
     whose coefficients differ from p's by the backward error of the
-    eigenvalues (at most ~ n^3 eps (sum |c|)^2 / |c_d| in p's scale: here 1e-8
-    of it, a 1e5-fold margin), so |p(a)| <= that + |b| max |p'|, and
+    eigenvalues (at most ~ n^3 eps (sum |c|)^2 / |c_d| in p's scale: here
+    ``ROOT_FREE_BACKWARD`` of it, a 1e5-fold margin), so |p(a)| <= that + |b| max |p'|, and
     max |p'| <= sum k |c_k| (1 + |b|)^(k - 1).  The minimum of |p| on
     [-1, 1] is bounded below by its Bernstein coefficients (convex hull),
     less their rounding.
@@ -162,29 +162,28 @@ def _far_from_zero(poly: np.ndarray) -> np.ndarray:
     a = np.abs(poly)
     total = a.sum(axis=1)
     allowed = (2.0 * tol.ROOT_IMAG * (a * np.arange(n + 1)).sum(axis=1)
-               + 1e-8 * total * total / a[:, n] + 1e-12 * total * 2.0 ** n)
-    # On PIECES equal pieces of [-1, 1] (one hull over the whole segment is
-    # too loose: the segment is a line's whole extent through the leaves).
-    b = (poly @ _bernstein_of_tau(n)).reshape(len(poly), _PIECES, n + 1)
+               + tol.ROOT_FREE_BACKWARD * total * total / a[:, n] + tol.ROOT_FREE_ROUNDING * total * 2.0 ** n)
+    # On ROOT_FREE_PIECES equal pieces of [-1, 1] (one hull over the whole
+    # segment is too loose: the segment is a line's whole extent through the leaves).
+    b = (poly @ _bernstein_of_tau(n)).reshape(len(poly), tol.ROOT_FREE_PIECES, n + 1)
     lo, hi = b.min(axis=(1, 2)), b.max(axis=(1, 2))
     return (lo > allowed) | (hi < -allowed)
 
 
-#: Pieces of [-1, 1] with a Bernstein hull each in :func:`_far_from_zero`.
-_PIECES = 8
 _TO_BERNSTEIN: dict = {}
 
 
 def _bernstein_of_tau(n: int) -> np.ndarray:
     """(n+1, PIECES (n+1)) M with ``poly @ M`` the Bernstein coefficients, on each of
-    ``_PIECES`` equal pieces of [-1, 1], of power coefficients in tau."""
-    if n not in _TO_BERNSTEIN:
+    the ``ROOT_FREE_PIECES`` equal pieces of [-1, 1], of power coefficients in tau."""
+    pieces = tol.ROOT_FREE_PIECES
+    if (n, pieces) not in _TO_BERNSTEIN:
         k = np.arange(n + 1)
         # b_i = sum_{j <= i} C(i, j) / C(n, j) a_j from power coefficients a in u on [0, 1].
         to_b = np.where(k[:, None] <= k[None, :], comb(k[None, :], k[:, None]) / comb(n, k[:, None]), 0.0)
         blocks = []
-        w = 2.0 / _PIECES
-        for piece in range(_PIECES):
+        w = 2.0 / pieces
+        for piece in range(pieces):
             t0 = -1.0 + piece * w
             # shift[kk, j]: coefficient of u^j in (t0 + w u)^kk
             shift = np.zeros((n + 1, n + 1))
@@ -192,5 +191,5 @@ def _bernstein_of_tau(n: int) -> np.ndarray:
                 j = np.arange(kk + 1)
                 shift[kk, : kk + 1] = comb(kk, j) * t0 ** (kk - j) * w ** j
             blocks.append(shift @ to_b)
-        _TO_BERNSTEIN[n] = np.concatenate(blocks, axis=1)
-    return _TO_BERNSTEIN[n]
+        _TO_BERNSTEIN[n, pieces] = np.concatenate(blocks, axis=1)
+    return _TO_BERNSTEIN[n, pieces]
