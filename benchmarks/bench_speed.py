@@ -1,6 +1,6 @@
 """Speed (issue #11): singmesh against marching cubes, and how its time scales.
 
-Three tables:
+Four tables:
 
 1. ``singmesh.mesh`` at its defaults against scikit-image's marching cubes
    on a 64^3 grid, sampling included, on the sphere, the tanglecube,
@@ -18,7 +18,11 @@ Three tables:
    and the Barth decic (300), the surfaces of ``nodes.py``, with the time
    per node and the part of the time spent finding the singular points.
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_speed.py [--repeat 5] [--only cmp,coarse,nodes]
+4. CPU time per stage of ``mesh()`` on the four surfaces of table 1 (the
+   functions ``api.py`` calls, wrapped for the run), with the shaping pass's
+   share (issue #12 wants it at most 10%).
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_speed.py [--repeat 5] [--only cmp,coarse,nodes,stages]
 
 This is a benchmark that prints figures, not a test.  On a shared machine
 the CPU time (``time.process_time``) is the steadier figure.
@@ -128,11 +132,55 @@ def by_nodes(repeat: int) -> None:
               flush=True)
 
 
+#: The stages of ``singmesh.api._mesh`` timed by :func:`by_stage` (names in ``singmesh.api``).
+STAGES = ["singular_curves", "singular_points", "subdivide", "star_cubes", "refine_stars", "compute_events",
+          "group_stars", "face_links", "find_cycles", "facet_polygons", "assemble", "improve_mesh"]
+
+
+def by_stage(repeat: int) -> None:
+    """CPU time of each stage of mesh() (the functions api.py calls, wrapped for the run), medians."""
+    from collections import defaultdict
+
+    from singmesh import api
+
+    spent: dict = defaultdict(float)
+    originals = {name: getattr(api, name) for name in STAGES}
+
+    def wrap(name, fn):
+        def timed_stage(*args, **kwargs):
+            c = time.process_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent[name] += time.process_time() - c
+        return timed_stage
+
+    print("\n4. CPU ms per stage of mesh() (defaults): medians; improve's share of the whole")
+    print(f"{'surface':11s} {'total':>7s} " + " ".join(f"{n[:10]:>10s}" for n in STAGES) + f" {'improve %':>9s}")
+    try:
+        for name in STAGES:
+            setattr(api, name, wrap(name, originals[name]))
+        for name, text, box, _ in SURFACES:
+            singmesh.mesh(text, box)
+            rows = []
+            for _ in range(repeat):
+                spent.clear()
+                c = time.process_time()
+                singmesh.mesh(text, box)
+                rows.append({"total": time.process_time() - c, **spent})
+            med = {k: 1e3 * statistics.median(r.get(k, 0.0) for r in rows) for k in ["total"] + STAGES}
+            print(f"{name:11s} {med['total']:7.1f} " + " ".join(f"{med[k]:10.1f}" for k in STAGES)
+                  + f" {100 * med['improve_mesh'] / med['total']:8.1f}%", flush=True)
+    finally:
+        for name, fn in originals.items():
+            setattr(api, name, fn)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeat", type=int, default=5, help="timed runs per figure (medians; default 5)")
     p.add_argument("--res", type=int, default=64, help="marching cubes cells per axis (default 64)")
-    p.add_argument("--only", default="cmp,coarse,nodes", help="tables to print: cmp, coarse, nodes")
+    p.add_argument("--only", default="cmp,coarse,nodes,stages", help="tables to print: cmp, coarse, nodes, stages")
     args = p.parse_args(argv)
     only = set(args.only.split(","))
     print(f"singmesh | numpy {np.__version__} | tables: {sorted(only)}")
@@ -142,6 +190,8 @@ def main(argv=None) -> int:
         by_coarse(args.repeat)
     if "nodes" in only:
         by_nodes(args.repeat)
+    if "stages" in only:
+        by_stage(args.repeat)
     return 0
 
 

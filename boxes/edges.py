@@ -321,12 +321,7 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
     """Turn root clusters into events using the signs of F between them."""
     # Sign samples: half-way to the neighbouring root on the same line, or
     # half a cell beyond the outermost root.
-    same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])
-    same_next = np.concatenate([line_of[:-1] == line_of[1:], [False]])
-    prev = np.where(same_prev, np.roll(pos, 1), pos - 1.0)
-    nxt = np.where(same_next, np.roll(pos, -1), pos + 1.0)
-    left = _signs(surface, tree, lines[line_of], (pos + prev) / 2)
-    right = _signs(surface, tree, lines[line_of], (pos + nxt) / 2)
+    left, right = _side_signs(surface, tree, lines, line_of, pos)
 
     # Events: r- where F < 0 on the left, r+ where F < 0 on the right; a
     # plain (unsnapped) sign change is one event at the root itself.
@@ -401,6 +396,26 @@ def _onto_surface(surface, points: np.ndarray, free: np.ndarray, reach: float):
     points = surface.project(points, free, iterations=3)
     ok = surface.is_zero(points) & (np.linalg.norm(points - start, axis=1) <= reach)
     return points, ok
+
+
+def _side_signs(surface, tree, lines, line_of, pos):
+    """Signs of F + eps (zero counts as +) half-way to the neighbouring roots of a line, or
+    half a cell beyond the outermost: (left, right) of each root, roots sorted by line and position."""
+    same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])
+    same_next = np.concatenate([line_of[:-1] == line_of[1:], [False]])[:len(pos)]
+    prev = np.where(same_prev, np.roll(pos, 1), pos - 1.0)[:len(pos)]
+    # The sample right of a root is the one left of the next root on its
+    # line (the same midpoint, to the bit): F is read once there, in one
+    # call with the samples beyond each line's last root.
+    last = np.flatnonzero(~same_next)
+    both = _signs(surface, tree, lines[np.concatenate([line_of, line_of[last]])],
+                  np.concatenate([(pos + prev) / 2, (pos[last] + (pos[last] + 1.0)) / 2]))
+    left = both[:len(pos)]
+    right = np.empty_like(left)
+    right[last] = both[len(pos):]
+    inner = np.flatnonzero(same_next)
+    right[inner] = left[inner + 1]
+    return left, right
 
 
 def _signs(surface, tree, lines_rows, pos):

@@ -60,10 +60,12 @@ def line_polynomials(coeffs: np.ndarray, axis: int, fixed: np.ndarray) -> np.nda
 def _rescale(poly: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
     """Coefficients in tau where s = centre + half * tau (rows independent)."""
     n = poly.shape[1] - 1
-    i = np.arange(n + 1)[None, :, None]
-    j = np.arange(n + 1)[None, None, :]
-    # coefficient of tau^j: sum_i c_i C(i, j) centre^(i-j) half^j
-    m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
+    i = np.arange(n + 1)[:, None]
+    j = np.arange(n + 1)[None, :]
+    # coefficient of tau^j: sum_i c_i C(i, j) centre^(i-j) half^j; the
+    # n + 1 powers of each centre once (not one per (i, j)), the same values.
+    powers = centre[:, None] ** np.arange(n + 1)
+    m = np.where(i >= j, comb(i, j) * powers[:, np.maximum(i - j, 0)], 0.0)
     out = np.einsum("li,lij->lj", poly, m)
     return out * half[:, None] ** np.arange(n + 1)
 
@@ -101,6 +103,13 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         if d < 1:
             continue
         sel = np.nonzero(nonzero & (degree == d))[0]
+        if bound == 1.0 and d >= 3:
+            # No eigenvalue of these could be kept (a quarter of a surface's
+            # lines): LAPACK solves each matrix alone, so the others' are
+            # the same without them.  (Quadratics cost less than the test.)
+            sel = sel[~_far_from_zero(tau_poly[sel, : d + 1])]
+            if len(sel) == 0:
+                continue
         c = tau_poly[sel, : d + 1] / tau_poly[sel, d : d + 1]
         comp = np.zeros((len(sel), d, d))
         comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
@@ -114,15 +123,73 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         return np.zeros(0, np.int64), np.zeros(0)
     row = np.concatenate(rows)
     root = np.concatenate(roots)
+    # A root that a step leaves unchanged (to the bit) stays so at every
+    # later step (a step is a function of the root): only the others go on.
+    active = np.arange(len(root))
     coeffs = tau_poly[row]
     for _ in range(tol.NEWTON_ITERATIONS):
-        p, dp = _horner(coeffs, root)
+        c, r = coeffs[active], root[active]
+        p, dp = _horner(c, r)
         ok = np.abs(dp) > 0
         step = np.where(ok, p / np.where(ok, dp, 1.0), 0.0)
         # Near a multiple root Newton may overshoot: accept only steps that
         # do not increase |p|.
-        trial = root - step
-        pt, _ = _horner(coeffs, trial)
+        trial = r - step
+        pt, _ = _horner(c, trial)
         better = np.abs(pt) <= np.abs(p)
-        root = np.where(better, trial, root)
+        new = np.where(better, trial, r)
+        root[active] = new
+        active = active[new.view(np.int64) != r.view(np.int64)]
+        if len(active) == 0:
+            break
     return row, root
+
+
+def _far_from_zero(poly: np.ndarray) -> np.ndarray:
+    """Polynomials (rows, lowest power first, the last coefficient not 0) with no root that
+    :func:`real_roots` could keep on [-1, 1]: |p| is larger on [-1, 1] than any such root allows.
+
+    A kept root z = a + ib (|a| <= 1, |b| <= ``ROOT_IMAG``) computed as an
+    eigenvalue of the companion matrix is an exact root of a polynomial
+    whose coefficients differ from p's by the backward error of the
+    eigenvalues (at most ~ n^3 eps (sum |c|)^2 / |c_d| in p's scale: here
+    ``ROOT_FREE_BACKWARD`` of it, a 1e5-fold margin), so |p(a)| <= that + |b| max |p'|, and
+    max |p'| <= sum k |c_k| (1 + |b|)^(k - 1).  The minimum of |p| on
+    [-1, 1] is bounded below by its Bernstein coefficients (convex hull),
+    less their rounding.
+    """
+    n = poly.shape[1] - 1
+    a = np.abs(poly)
+    total = a.sum(axis=1)
+    allowed = (2.0 * tol.ROOT_IMAG * (a * np.arange(n + 1)).sum(axis=1)
+               + tol.ROOT_FREE_BACKWARD * total * total / a[:, n] + tol.ROOT_FREE_ROUNDING * total * 2.0 ** n)
+    # On ROOT_FREE_PIECES equal pieces of [-1, 1] (one hull over the whole
+    # segment is too loose: the segment is a line's whole extent through the leaves).
+    b = (poly @ _bernstein_of_tau(n)).reshape(len(poly), tol.ROOT_FREE_PIECES, n + 1)
+    lo, hi = b.min(axis=(1, 2)), b.max(axis=(1, 2))
+    return (lo > allowed) | (hi < -allowed)
+
+
+_TO_BERNSTEIN: dict = {}
+
+
+def _bernstein_of_tau(n: int) -> np.ndarray:
+    """(n+1, PIECES (n+1)) M with ``poly @ M`` the Bernstein coefficients, on each of
+    the ``ROOT_FREE_PIECES`` equal pieces of [-1, 1], of power coefficients in tau."""
+    pieces = tol.ROOT_FREE_PIECES
+    if (n, pieces) not in _TO_BERNSTEIN:
+        k = np.arange(n + 1)
+        # b_i = sum_{j <= i} C(i, j) / C(n, j) a_j from power coefficients a in u on [0, 1].
+        to_b = np.where(k[:, None] <= k[None, :], comb(k[None, :], k[:, None]) / comb(n, k[:, None]), 0.0)
+        blocks = []
+        w = 2.0 / pieces
+        for piece in range(pieces):
+            t0 = -1.0 + piece * w
+            # shift[kk, j]: coefficient of u^j in (t0 + w u)^kk
+            shift = np.zeros((n + 1, n + 1))
+            for kk in range(n + 1):
+                j = np.arange(kk + 1)
+                shift[kk, : kk + 1] = comb(kk, j) * t0 ** (kk - j) * w ** j
+            blocks.append(shift @ to_b)
+        _TO_BERNSTEIN[n, pieces] = np.concatenate(blocks, axis=1)
+    return _TO_BERNSTEIN[n, pieces]

@@ -128,7 +128,8 @@ def group_stars(tree: Octree, cubes: np.ndarray, points: np.ndarray):
     has_surface = np.bincount(owner, minlength=len(cubes)) > 0
     for i, (lo, hi) in enumerate(lattice):
         cand = by_x[np.searchsorted(xs, lo[0]):np.searchsorted(xs, hi[0])]
-        inside = cand[((leaf_lo[cand] >= lo) & (leaf_hi[cand] <= hi)).all(axis=1)]
+        ok = (leaf_lo[cand] >= lo) & (leaf_hi[cand] <= hi)  # (the axes and-ed: no reduction per row)
+        inside = cand[ok[:, 0] & ok[:, 1] & ok[:, 2]]
         if len(inside) == 0 or not has_surface[i]:
             continue  # no surface around it: an isolated real point
         if (group[inside] >= n).any():

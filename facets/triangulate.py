@@ -38,19 +38,35 @@ def polygon_triangulations(n: int) -> np.ndarray:
 
 def triangle_quality(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """Smallest angle (radians) of triangles (..., 3, 3); -1 if facing against ``normal``."""
-    e0 = p[..., 1, :] - p[..., 0, :]
-    e1 = p[..., 2, :] - p[..., 1, :]
-    e2 = p[..., 0, :] - p[..., 2, :]
+    return _quality([p[..., 0, a] for a in range(3)], [p[..., 1, a] for a in range(3)],
+                    [p[..., 2, a] for a in range(3)], [normal[..., a] for a in range(3)])
+
+
+def _quality(q0, q1, q2, normal) -> np.ndarray:
+    """:func:`triangle_quality` of the triangles with corners q0, q1, q2, each a list of the x, y, z arrays.
+
+    Written out per coordinate (no axis of 3 to reduce or contract, which
+    costs a call per triangle row): each length, dot and cross product is
+    the same sum in the same order as ``np.linalg.norm``, ``einsum`` and
+    ``np.cross`` on rows would make it, so the qualities are the same to the bit.
+    """
+    e0 = [b - a for a, b in zip(q0, q1)]
+    e1 = [b - a for a, b in zip(q1, q2)]
+    e2 = [b - a for a, b in zip(q2, q0)]
     # Each side's length once (|-e| is |e| to the bit: the same squares).
-    n0, n1, n2 = (np.linalg.norm(e, axis=-1) for e in (e0, e1, e2))
-    m0, m1, m2 = -e0, -e1, -e2
+    n0, n1, n2 = (np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) for e in (e0, e1, e2))
 
     def angle(a, b, na, nb):
-        c = np.einsum("...i,...i->...", a, b) / np.maximum(na * nb, 1e-300)
-        return np.arccos(np.clip(c, -1.0, 1.0))
+        # The angle between a and -b; einsum's sum over an axis of 3 adds
+        # the first and the last term first.
+        c = (-(a[0] * b[0]) - a[2] * b[2]) - a[1] * b[1]
+        return np.arccos(np.clip(c / np.maximum(na * nb, 1e-300), -1.0, 1.0))
 
-    ang = np.minimum(np.minimum(angle(e0, m2, n0, n2), angle(e1, m0, n1, n0)), angle(e2, m1, n2, n1))
-    facing = np.einsum("...i,...i->...", np.cross(e0, m2), normal)
+    ang = np.minimum(np.minimum(angle(e0, e2, n0, n2), angle(e1, e0, n1, n0)), angle(e2, e1, n2, n1))
+    # (e0 x -e2) . normal
+    m2 = [-x for x in e2]
+    cross = (e0[1] * m2[2] - e0[2] * m2[1], e0[2] * m2[0] - e0[0] * m2[2], e0[0] * m2[1] - e0[1] * m2[0])
+    facing = (cross[0] * normal[0] + cross[2] * normal[2]) + cross[1] * normal[1]
     return np.where(facing > 0, ang, -1.0)
 
 
@@ -205,8 +221,16 @@ def _crowded_edges(faces: np.ndarray, n_vertices: int) -> np.ndarray:
 def _template_quality(poly: np.ndarray, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """Quality (:func:`triangle_quality`) of every triangle of the polygons' vertices: (P, C(n, 3))."""
     combos = _combos(poly.shape[1])
-    normal = normals[poly].sum(axis=1)
-    return triangle_quality(points[poly[:, combos]], normal[:, None, :])
+    # The vertices' normals summed in order (what .sum(axis=1) of the
+    # (P, n, 3) gather adds, one vertex after the other: the same bits).
+    normal = normals[poly[:, 0]] + normals[poly[:, 1]]
+    for k in range(2, poly.shape[1]):
+        normal += normals[poly[:, k]]
+    # Gathered per coordinate, (P, n) then (P, C): a third of the index work
+    # of the (P, C, 3, 3) corner table.
+    xyz = [np.ascontiguousarray(points[:, a])[poly] for a in range(3)]
+    corners = [[c[:, combos[:, k]] for c in xyz] for k in range(3)]
+    return _quality(*corners, [normal[:, None, a] for a in range(3)])
 
 
 @lru_cache(maxsize=None)
@@ -249,7 +273,11 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
         keys = edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
         bad = (np.isin(keys, forbidden_edges) & diagonal[None]).any(axis=2)
         q = np.where(bad, -2.0, q)
-    score = q[:, tmpl_idx].min(axis=2)  # (P, T)
+    # The smallest quality of each template's triangles (P, T): exact, as
+    # q[:, tmpl_idx].min(axis=2), without a reduction call per (P, T) row.
+    score = q[:, tmpl_idx[:, 0]]
+    for k in range(1, tmpl_idx.shape[1]):
+        score = np.minimum(score, q[:, tmpl_idx[:, k]])
     best = np.argmax(score, axis=1)
     tri_local = templates[best]  # (P, n-2, 3)
     return np.take_along_axis(poly[:, None, :], tri_local.reshape(len(poly), -1)[:, None, :], axis=2) \

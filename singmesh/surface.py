@@ -500,6 +500,24 @@ class PolynomialSurface(Surface):
         rows = [np.stack(v[3 * a:3 * a + 3], -1) for a in range(3)]
         return np.stack(rows, axis=-2)
 
+    def is_zero(self, points) -> np.ndarray:
+        """Whether F is zero at ``points`` to within its rounding error: bool (...).
+
+        :meth:`Surface.is_zero`; the sum of |terms| is evaluated only when
+        some |F| is below its bound (sum |c|) max(1, |p|)^degree (twice it,
+        for the rounding of the sum): at lattice corners F is rarely zero.
+        """
+        p = np.asarray(points, dtype=float)
+        v = self(p)
+        eps = ZERO_ULPS * np.finfo(float).eps
+        # max(1, |x|, |y|, |z|) per point (not a reduction along the axis of 3: a call per point)
+        a = np.abs(p)
+        reach = np.maximum(np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2]), 1.0)
+        bound = 2.0 * float(np.abs(self.coeffs).sum()) * reach ** self.degree
+        if not (np.abs(v) <= eps * bound).any():
+            return np.zeros(v.shape, bool)
+        return np.abs(v) <= eps * self.magnitude(p)
+
     def magnitude(self, points) -> np.ndarray:
         """Sum of |terms| of F at ``points``: the scale of F's rounding error."""
         return evaluate_tensor(np.abs(self.coeffs), np.abs(np.asarray(points, float)))
@@ -511,8 +529,11 @@ class PolynomialSurface(Surface):
 
     @property
     def scale(self) -> float:
-        """The largest |coefficient|."""
-        return float(np.abs(self.coeffs).max())
+        """The largest |coefficient| (cached)."""
+        cache = self.__dict__.setdefault("_cache", {})
+        if "scale" not in cache:
+            cache["scale"] = float(np.abs(self.coeffs).max())
+        return cache["scale"]
 
     def taylor(self, point, order: int | None = None) -> np.ndarray:
         """Taylor coefficients at ``point``: exact up to rounding at the default order (the degree)."""

@@ -49,6 +49,17 @@ SNAP_DISTANCE = 1e-6
 #: candidates for real roots; they are then confirmed by sign tests.
 ROOT_IMAG = 1e-5
 
+#: A lattice line's polynomial is skipped (no eigenvalues) only where |p| on
+#: the segment exceeds what a root kept by ROOT_IMAG allows: its Bernstein
+#: hulls on ROOT_FREE_PIECES pieces of the segment (one hull over a line's
+#: whole extent is too loose) stay above 2 ROOT_IMAG sum k |c_k| (twice the
+#: bound of |b| max |p'|), plus ROOT_FREE_BACKWARD (sum |c|)^2 / |c_d| (the
+#: eigenvalues' backward error, ~ n^3 eps of it, with a 1e5-fold margin)
+#: plus ROOT_FREE_ROUNDING 2^n sum |c| (the rounding of the hull).
+ROOT_FREE_PIECES = 8
+ROOT_FREE_BACKWARD = 1e-8
+ROOT_FREE_ROUNDING = 1e-12
+
 #: Newton polishing of roots on lattice lines: iterations and the relative
 #: step at which it stops.
 NEWTON_ITERATIONS = 8

@@ -87,6 +87,7 @@ import re
 import sys
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
@@ -290,8 +291,7 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
     S = float(np.max(np.abs(T[deg >= 2]), initial=0.0))
     _check_singular(s, p, T, S)
 
-    hess = np.array([[T[tuple(np.add(_unit(a), _unit(b)))] * (2.0 if a == b else 1.0)
-                      for b in range(3)] for a in range(3)])
+    hess = T[_HESSIAN_INDEX] * _HESSIAN_FACTOR
     lam, vec = np.linalg.eigh(hess)
     zero = np.abs(lam) <= rank_rtol * S
     signature = (int(np.sum((lam > 0) & ~zero)), int(np.sum((lam < 0) & ~zero)), int(np.sum(zero)))
@@ -331,6 +331,12 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
                 f"a curve of singular points (D_inf) or D_k with k > {N + 1}")
     return SingularityType(name="non-simple", real_form=None, milnor=None, branches=None,
                            axis=None, note=note, **common), Frame(**frame)
+
+
+#: The entries of a Taylor tensor holding the Hessian ((3, 3) index arrays), and their factors
+#: (2 on the diagonal: the coefficient of x^2 is F_xx / 2).
+_HESSIAN_INDEX = tuple((np.arange(3)[:, None] == c).astype(np.int64) + (np.arange(3)[None, :] == c) for c in range(3))
+_HESSIAN_FACTOR = np.where(np.eye(3, dtype=bool), 2.0, 1.0)
 
 
 def _as_point(point) -> np.ndarray:
@@ -562,28 +568,37 @@ def _ek(g, cubic, sign_mu, tol, common, frame) -> SingularityType:
 
 def _format_jet(T: np.ndarray, tol: float, order: int = 3) -> str:
     """The terms of degree 2..order of a Taylor tensor as text (x, y, z)."""
+    index, monos = _jet_monomials(T.shape[0], order)
+    coeffs = T[index].tolist() if len(monos) else []
     terms = []
-    for total in range(2, order + 1):
-        for i in range(total, -1, -1):
-            for j in range(total - i, -1, -1):
-                k = total - i - j
-                if max(i, j, k) >= T.shape[0]:
-                    continue
-                c = float(T[i, j, k])
-                if abs(c) <= tol:
-                    continue
-                mono = " ".join(
-                    v if e == 1 else f"{v}^{e}"
-                    for v, e in (("x", i), ("y", j), ("z", k)) if e)
-                mag = abs(c)
-                coef = "" if abs(mag - 1.0) <= 1e-9 else f"{mag:.6g} "
-                terms.append(("-" if c < 0 else "+", coef + mono))
+    for c, mono in zip(coeffs, monos):
+        if abs(c) <= tol:
+            continue
+        mag = abs(c)
+        coef = "" if abs(mag - 1.0) <= 1e-9 else f"{mag:.6g} "
+        terms.append(("-" if c < 0 else "+", coef + mono))
     if not terms:
         return "0"
     out = ("-" if terms[0][0] == "-" else "") + terms[0][1]
     for sign, text in terms[1:]:
         out += f" {sign} {text}"
     return out
+
+
+@lru_cache(maxsize=None)
+def _jet_monomials(size: int, order: int) -> tuple[tuple, list[str]]:
+    """The (i, j, k) index arrays and texts of the monomials of degree 2..order of :func:`_format_jet`, in its order."""
+    rows, monos = [], []
+    for total in range(2, order + 1):
+        for i in range(total, -1, -1):
+            for j in range(total - i, -1, -1):
+                k = total - i - j
+                if max(i, j, k) >= size:
+                    continue
+                rows.append((i, j, k))
+                monos.append(" ".join(v if e == 1 else f"{v}^{e}" for v, e in (("x", i), ("y", j), ("z", k)) if e))
+    index = tuple(np.array(c, dtype=np.int64) for c in zip(*rows)) if rows else ()
+    return index, monos
 
 
 # ----------------------------------------------------------------- command

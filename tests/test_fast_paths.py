@@ -18,8 +18,11 @@ from singmesh.boxes import edges as edges_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
 from singmesh.boxes.octree import subdivide
+from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
-from singmesh.facets.triangulate import _triple_keys
+from singmesh.facets.flips import area_and_longest
+from singmesh.facets.triangulate import (_choose_template, _combos, _template_combos, _template_quality, _triple_keys,
+                                        polygon_triangulations, triangle_quality)
 from singmesh.surface import Surface
 
 from test_rounded import float_rotated
@@ -152,3 +155,299 @@ def test_triple_keys_of_sorted_triples():
     tri[::7, 1] = tri[::7, 0]
     t = np.sort(tri, axis=1)
     assert np.array_equal(_triple_keys(tri, 1000), (t[:, 0] << 42) | (t[:, 1] << 21) | t[:, 2])
+
+
+def _row_quality(p, normal):
+    """Smallest angle of triangles (..., 3, 3) from rows of 3 (norm, einsum, cross), -1 facing away."""
+    e0, e1, e2 = p[..., 1, :] - p[..., 0, :], p[..., 2, :] - p[..., 1, :], p[..., 0, :] - p[..., 2, :]
+    n0, n1, n2 = (np.linalg.norm(e, axis=-1) for e in (e0, e1, e2))
+
+    def angle(a, b, na, nb):
+        return np.arccos(np.clip(np.einsum("...i,...i->...", a, b) / np.maximum(na * nb, 1e-300), -1.0, 1.0))
+
+    ang = np.minimum(np.minimum(angle(e0, -e2, n0, n2), angle(e1, -e0, n1, n0)), angle(e2, -e1, n2, n1))
+    facing = np.einsum("...i,...i->...", np.cross(e0, -e2), normal)
+    return np.where(facing > 0, ang, -1.0)
+
+
+@pytest.mark.parametrize("n", [4, 5, 6, 8])
+def test_template_quality_per_coordinate_is_the_rows(n):
+    """The triangle qualities written per coordinate are those of rows of 3, bit for bit: on
+    float points, slivers (corners 1e-12 apart), triangles facing away and repeated corners."""
+    rng = np.random.default_rng(n)
+    points = rng.normal(size=(400, 3)) @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    points[::5] = points[1::5] + 1e-12 * rng.normal(size=points[1::5].shape)
+    normals = rng.normal(size=(400, 3))
+    poly = rng.integers(0, 400, (300, n))
+    poly[::9, 1] = poly[::9, 0]
+    combos = _combos(n)
+    want = _row_quality(points[poly[:, combos]], normals[poly].sum(axis=1)[:, None, :])
+    got = _template_quality(poly, points, normals)
+    assert (want == -1.0).any() and (want > 0).any()
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
+    p = points[poly[:, :3]]
+    assert np.array_equal(triangle_quality(p, normals[:300]).view(np.int64),
+                          _row_quality(p, normals[:300]).view(np.int64))
+
+
+def test_area_and_longest_per_coordinate_are_the_rows():
+    """Doubled areas and longest sides written per coordinate are those of norm, cross and sum
+    over rows of 3, bit for bit (float points, slivers, repeated corners)."""
+    rng = np.random.default_rng(5)
+    vertices = rng.normal(size=(500, 3)) @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    vertices[::4] = vertices[1::4] + 1e-13 * rng.normal(size=vertices[1::4].shape)
+    faces = rng.integers(0, 500, (2000, 3))
+    faces[::11, 2] = faces[::11, 0]
+    p = vertices[faces]
+    area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    longest = np.max([np.sum((p[:, i] - p[:, (i + 1) % 3]) ** 2, axis=1) for i in range(3)], axis=0)
+    got_area, got_longest = area_and_longest(vertices, faces)
+    assert (area2 == 0).any()
+    assert np.array_equal(got_area.view(np.int64), area2.view(np.int64))
+    assert np.array_equal(got_longest.view(np.int64), longest.view(np.int64))
+
+
+def _line_polynomials(rng, count):
+    """Polynomials in tau of degree 1..6 with roots where they are hard to tell apart: near +-1,
+    near-double, complex pairs 1e-9..1e-3 off the axis (about ROOT_IMAG), tiny leading terms."""
+    out = []
+    for _ in range(count):
+        n = int(rng.integers(1, 7))
+        roots = rng.uniform(-1.6, 1.6, n).astype(complex)
+        kind = rng.random()
+        if kind < 0.25 and n >= 2:
+            roots[1] = np.conj(roots[0]) if roots[0].imag else roots[0] + 10 ** rng.uniform(-12, -4)
+        if 0.25 <= kind < 0.5 and n >= 2:
+            roots[0] = roots[0].real + 1j * 10 ** rng.uniform(-9, -3)
+            roots[1] = np.conj(roots[0])
+        if 0.5 <= kind < 0.6:
+            roots[0] = rng.choice([-1.0, 1.0]) * (1 + rng.choice([0.0, 1e-15, -1e-15, 1e-9]))
+        c = np.real(np.polynomial.polynomial.polyfromroots(roots)) * 10 ** rng.uniform(-6, 6)
+        if rng.random() < 0.1:
+            c[-1] *= 1e-11
+        out.append(np.concatenate([c, np.zeros(7 - len(c))]))
+    return np.array(out)
+
+
+def test_line_roots_without_root_free_lines_are_all_roots(monkeypatch):
+    """Lines proven free of roots to keep (Bernstein hulls on pieces of the segment) skip the
+    eigenvalues: the roots are those of all lines' eigenvalues, bit for bit, on hard polynomials
+    and on the lines of a float-rotated surface."""
+    rng = np.random.default_rng(6)
+    polys = [_line_polynomials(rng, 3000)]
+    surface = Surface.parse(float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0])
+    tree = subdivide(surface, BOX, 3, 5)
+    cap = []
+    real = polynomial_lines.real_roots
+    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b: cap.append(p) or real(p, b))
+    compute_events(surface, tree)
+    monkeypatch.setattr(polynomial_lines, "real_roots", real)
+    polys += cap
+    skipped = 0
+    for p in polys:
+        got = real(p, 1.0)
+        skipped += sum(int(polynomial_lines._far_from_zero(p[np.abs(p[:, d]) > 0, :d + 1]).sum()) for d in range(3, p.shape[1]))
+        with monkeypatch.context() as m:
+            m.setattr(polynomial_lines, "_far_from_zero", lambda q: np.zeros(len(q), bool))
+            want = real(p, 1.0)
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1].view(np.int64), want[1].view(np.int64))
+    assert skipped > 100
+
+
+def test_newton_polish_stops_at_fixed_points():
+    """real_roots' Newton polish on the roots still moving only gives the roots of all
+    NEWTON_ITERATIONS steps on all of them, bit for bit."""
+    rng = np.random.default_rng(7)
+    polys = _line_polynomials(rng, 2000)
+    row, root = polynomial_lines.real_roots(polys, 1.0)
+    # The same eigenvalues, polished the plain way.
+    seen = []
+    orig = polynomial_lines._horner
+    try:
+        polynomial_lines._horner = lambda c, t: seen.append(len(t)) or orig(c, t)
+        polynomial_lines.real_roots(polys, 1.0)
+    finally:
+        polynomial_lines._horner = orig
+    assert len(seen) < 2 * tol.NEWTON_ITERATIONS or min(seen) < max(seen)  # the shortcut is taken
+    start = _eigen_roots(polys, row)
+    coeffs = polys[row]
+    for _ in range(tol.NEWTON_ITERATIONS):
+        p, dp = orig(coeffs, start)
+        ok = np.abs(dp) > 0
+        trial = start - np.where(ok, p / np.where(ok, dp, 1.0), 0.0)
+        start = np.where(np.abs(orig(coeffs, trial)[0]) <= np.abs(p), trial, start)
+    assert np.array_equal(root.view(np.int64), start.view(np.int64))
+
+
+def _eigen_roots(polys, row):
+    """The unpolished roots real_roots starts from, in its order (rows ``row``)."""
+    orig = polynomial_lines._horner
+    starts = []
+
+    def first(c, t):
+        if not starts:
+            starts.append(t.copy())
+        return orig(c, t)
+    try:
+        polynomial_lines._horner = first
+        polynomial_lines.real_roots(polys, 1.0)
+    finally:
+        polynomial_lines._horner = orig
+    assert len(starts[0]) == len(row)
+    return starts[0]
+
+
+def _plain_jet(T, tol, order):
+    """The jet text term by term (the loop over monomials _format_jet's table replaces)."""
+    terms = []
+    for total in range(2, order + 1):
+        for i in range(total, -1, -1):
+            for j in range(total - i, -1, -1):
+                k = total - i - j
+                if max(i, j, k) >= T.shape[0] or abs(float(T[i, j, k])) <= tol:
+                    continue
+                c = float(T[i, j, k])
+                mono = " ".join(v if e == 1 else f"{v}^{e}" for v, e in (("x", i), ("y", j), ("z", k)) if e)
+                terms.append(("-" if c < 0 else "+", ("" if abs(abs(c) - 1.0) <= 1e-9 else f"{abs(c):.6g} ") + mono))
+    if not terms:
+        return "0"
+    return ("-" if terms[0][0] == "-" else "") + terms[0][1] + "".join(f" {s} {t}" for s, t in terms[1:])
+
+
+def test_jet_text_and_hessian_from_tables():
+    """classify's jet text and Hessian read through index tables: as term by term."""
+    from singmesh.skeleton import classify
+
+    rng = np.random.default_rng(8)
+    for n in (1, 2, 3, 4, 7):
+        for _ in range(100):
+            T = rng.normal(size=(n, n, n)) * (rng.random((n, n, n)) < 0.5)
+            T[rng.random((n, n, n)) < 0.1] = rng.choice([-1.0, 1.0])
+            for order in (2, 3, 4):
+                assert classify._format_jet(T, 0.3, order) == _plain_jet(T, 0.3, order)
+            if n >= 3:
+                want = [[T[tuple(np.eye(3, dtype=int)[a] + np.eye(3, dtype=int)[b])] * (2.0 if a == b else 1.0)
+                         for b in range(3)] for a in range(3)]
+                assert np.array_equal(T[classify._HESSIAN_INDEX] * classify._HESSIAN_FACTOR, np.array(want))
+
+
+def test_face_modes_with_faces_along_rows_are_the_sign_tests():
+    """face_modes' sign tests on faces laid along the last axis: those of bernstein.sign_definite on each
+    face's differences (exact zeros, constant rows, NaN, a variable of degree 0)."""
+    from singmesh.boxes.bernstein import sign_definite
+    from singmesh.boxes.polynomial_bounds import face_modes
+
+    rng = np.random.default_rng(9)
+    for shape in [(400, 4, 4, 4), (400, 3, 1, 3), (400, 2, 2, 2)]:
+        t = np.round(rng.normal(size=shape), 1)
+        t[::5] = np.cumsum(np.abs(t[::5]), axis=2)          # monotone along z
+        t[1::7] = 0.0
+        t[2::11, 0, 0, 0] = np.nan
+        for n in range(3):
+            side = rng.integers(0, 2, len(t))
+            face = np.stack([np.take(t[i], -side[i], axis=n) for i in range(len(t))])
+            if n == 1:
+                face = np.swapaxes(face, 1, 2)
+            over_u = sign_definite(np.diff(face, axis=2), (1, 2))
+            over_v = sign_definite(np.diff(face, axis=1), (1, 2))
+            want = np.where(over_u, 0, np.where(over_v, 1, 2))
+            assert np.array_equal(face_modes(t, n, side), want)
+
+
+def test_rescaled_line_polynomials_with_each_power_once():
+    """_rescale reads centre^(i - j) from one table of powers per centre: the coefficients are
+    those of a power per (i, j), bit for bit (centres 0, negative, 15-digit decimals)."""
+    from scipy.special import comb
+
+    rng = np.random.default_rng(10)
+    for n in range(0, 7):
+        poly = rng.normal(size=(500, n + 1))
+        centre = np.round(rng.uniform(-3, 3, 500), 15)
+        centre[::5] = 0.0
+        half = rng.uniform(0.01, 1, 500)
+        i, j = np.arange(n + 1)[None, :, None], np.arange(n + 1)[None, None, :]
+        m = np.where(i >= j, comb(i, j) * centre[:, None, None] ** np.maximum(i - j, 0), 0.0)
+        want = np.einsum("li,lij->lj", poly, m) * half[:, None] ** np.arange(n + 1)
+        assert np.array_equal(polynomial_lines._rescale(poly, centre, half).view(np.int64), want.view(np.int64))
+
+
+def test_side_signs_read_each_midpoint_once(tree_of, monkeypatch):
+    """The signs left and right of every root, F read once per midpoint between two roots:
+    those of the two plain evaluations (left samples, right samples), on the surfaces' own roots."""
+    surface, tree = tree_of
+    seen = {}
+    real = edges_mod._events_from_roots
+
+    def grab(surface, tree, lines, uniq, line_of, pos, snap):
+        seen.update(lines=lines, line_of=line_of, pos=pos)
+        return real(surface, tree, lines, uniq, line_of, pos, snap)
+    monkeypatch.setattr(edges_mod, "_events_from_roots", grab)
+    compute_events(surface, tree)
+    lines, line_of, pos = seen["lines"], seen["line_of"], seen["pos"]
+    assert len(pos) > 10 and (line_of[1:] == line_of[:-1]).any()
+    same_prev = np.concatenate([[False], line_of[1:] == line_of[:-1]])
+    same_next = np.concatenate([line_of[:-1] == line_of[1:], [False]])
+    prev = np.where(same_prev, np.roll(pos, 1), pos - 1.0)
+    nxt = np.where(same_next, np.roll(pos, -1), pos + 1.0)
+    want_left = edges_mod._signs(surface, tree, lines[line_of], (pos + prev) / 2)
+    want_right = edges_mod._signs(surface, tree, lines[line_of], (pos + nxt) / 2)
+    left, right = edges_mod._side_signs(surface, tree, lines, line_of, pos)
+    assert np.array_equal(left, want_left) and np.array_equal(right, want_right)
+    empty = edges_mod._side_signs(surface, tree, lines, line_of[:0], pos[:0])
+    assert len(empty[0]) == 0 and len(empty[1]) == 0
+
+
+def test_is_zero_skips_the_term_sizes_only_where_no_value_is_small():
+    """A polynomial's is_zero reads the sum of |terms| only when some |F| is under its bound: the
+    answer is Surface.is_zero's, with zeros at lattice points, near-zeros and none."""
+    from singmesh.surface import Surface as Base
+
+    rng = np.random.default_rng(11)
+    for text in ["4(x^2+y^2+z^2) + 16 x y z - 1", "x^2 - y^2 z", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0],
+                 "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8"]:
+        s = Surface.parse(text)
+        lattice = np.stack(np.meshgrid(*[np.linspace(-2, 2, 17)] * 3, indexing="ij"), -1).reshape(-1, 3)
+        for pts in [lattice, rng.uniform(-3, 3, (500, 3)), lattice[:1], np.zeros((0, 3)), np.array([[0.0, 0.0, 0.0], [0.5, 0.5, -0.5]])]:
+            assert np.array_equal(s.is_zero(pts), Base.is_zero(s, pts))
+    cayley = Surface.parse("4(x^2+y^2+z^2) + 16 x y z - 1")
+    assert cayley.is_zero(np.array([[0.5, 0.5, -0.5], [0.5, 0.5, 0.5]])).tolist() == [True, False]
+    # On the sphere to rounding: |F| of an ulp or two, not 0, and zero to is_zero.
+    sphere = Surface.parse("x^2 + y^2 + z^2 - 1")
+    on = rng.normal(size=(300, 3))
+    on /= np.linalg.norm(on, axis=1)[:, None]
+    on = on[sphere(on) != 0]
+    assert len(on) > 50 and sphere.is_zero(on).all()
+
+
+@pytest.mark.parametrize("n", [4, 5, 6, 8])
+def test_best_template_by_columns_is_by_rows(n):
+    """The template whose worst triangle is best, its worst read column by column: the choice of
+    q[:, templates].min(axis=2) and argmax (ties, -1 and -2 qualities, NaN)."""
+    rng = np.random.default_rng(12 + n)
+    poly = rng.integers(0, 1000, (500, n))
+    q = np.round(rng.random((500, len(_combos(n)))), 1)
+    q[rng.random(q.shape) < 0.05] = -1.0
+    q[::17, 0] = np.nan
+    best = np.argmax(q[:, _template_combos(n)].min(axis=2), axis=1)
+    tri = polygon_triangulations(n)[best]
+    want = np.take_along_axis(poly[:, None, :], tri.reshape(len(poly), -1)[:, None, :], axis=2).reshape(-1, 3)
+    assert np.array_equal(_choose_template(poly, q), want)
+
+
+def test_faces_without_loops_along_rows_are_the_sign_tests():
+    """face_without_loops with the faces laid along the last axis: the plain tests per face
+    (tangential differences of one sign, or no sign change), with ties, NaN, a side of one
+    coefficient and no face at all."""
+    from singmesh.boxes.bernstein import sign_definite
+    from singmesh.boxes.polynomial_bounds import face_without_loops
+
+    rng = np.random.default_rng(14)
+    for shape in [(600, 5, 5), (600, 3, 1), (600, 2, 2), (0, 4, 4)]:
+        face = np.round(rng.normal(size=shape), 1)
+        face[::4] = np.abs(face[::4])
+        face[1::6] = np.cumsum(np.abs(face[1::6]), axis=1)
+        if len(face):
+            face[2::9, 0, 0] = np.nan
+        want = (sign_definite(np.diff(face, axis=1), (1, 2)) | sign_definite(np.diff(face, axis=2), (1, 2))
+                | (face.min(axis=(1, 2), initial=np.inf) >= 0) | (face.max(axis=(1, 2), initial=-np.inf) < 0))
+        assert np.array_equal(face_without_loops(face), want)
