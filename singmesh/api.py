@@ -37,7 +37,8 @@ DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
 
 
 def _level(cells: int, what: str) -> int:
-    if not isinstance(cells, (int, np.integer)) or cells < 1 or cells & (cells - 1):
+    if (not isinstance(cells, (int, np.integer)) or isinstance(cells, (bool, np.bool_))
+            or cells < 1 or cells & (cells - 1)):
         raise SurfaceError(f"{what} must be a power of two (boxes per axis), not {cells!r}")
     level = int(cells).bit_length() - 1
     if level > tol.MAX_LEVEL:
@@ -62,7 +63,30 @@ def check_box(box) -> np.ndarray:
             raise SurfaceError(f"the box is inverted in {axis}: {lo:g} > {hi:g}")
         if hi == lo:
             raise SurfaceError(f"the box is empty in {axis}: {lo:g} = {hi:g}")
+    # Outside these scales the bounds and Newton steps, whose tolerances
+    # are partly absolute, lose the surface (an empty mesh, not an error).
+    size = float(np.abs(b).max())
+    if size > tol.BOX_MAX_COORD:
+        raise SurfaceError(f"the box reaches {size:g}, over the limit of {tol.BOX_MAX_COORD:g}: "
+                           "scale the equation (x -> s x) to a smaller box")
+    side = b[:, 1] - b[:, 0]
+    for axis, w in zip("xyz", side):
+        if w < tol.BOX_MIN_SIDE:
+            raise SurfaceError(f"the box is {w:g} wide in {axis}, under the limit of {tol.BOX_MIN_SIDE:g}: "
+                               "scale the equation (x -> s x) to a larger box")
+        if w < tol.BOX_MIN_RELATIVE_SIDE * size:
+            raise SurfaceError(f"the box is {w:g} wide in {axis}, too narrow for its distance {size:g} from 0 "
+                               f"(at least {tol.BOX_MIN_RELATIVE_SIDE:g} of it): shift the equation to 0")
     return b
+
+
+def check_defined(surf: Surface, box: np.ndarray) -> None:
+    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
+    undefined = getattr(surf, "undefined_everywhere", None)
+    if undefined is not None and undefined(box):
+        where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
+        raise SurfaceError(f"F = {surf.expr} is undefined everywhere in the box {where} "
+                           "(e.g. sqrt or log of a negative number)")
 
 
 def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,
@@ -162,6 +186,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # F = G^2 H: G = 0 is no sign change; mesh G H and say so.
     surf, repeated = squarefree(surf)
     b = check_box(box)
+    check_defined(surf, b)
     coarse_level = _level(coarse, "coarse")
     fine_level = _level(fine, "fine")
     if fine_level < coarse_level:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -38,6 +39,24 @@ def _percent(flags: np.ndarray) -> float:
 
 #: Formats whose files hold line cells beside the triangles.
 LINE_FORMATS = ("vtk", "vtu", "xdmf", "gmsh")
+
+
+def _write_atomic(path: Path, write: Callable[[Path], Any], in_place: bool = False) -> None:
+    """``write(target)``, then ``target`` renamed to ``path``: no partial file is ever at ``path``.
+
+    The target is a hidden file in the same folder (a rename within a file
+    system is atomic), removed if the writer fails.  ``in_place``: formats
+    whose file names a companion file (XDMF's ``.h5``) are written at
+    ``path`` itself, and removed on failure.
+    """
+    target = path if in_place else path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        write(target)
+        if not in_place:
+            os.replace(target, path)
+    except BaseException:
+        target.unlink(missing_ok=True)
+        raise
 
 
 class SingularPointWarning(UserWarning):
@@ -421,7 +440,8 @@ class Mesh:
 
         path = Path(path)
         pts, edges, _ = self.curve_graph
-        meshio.Mesh(pts, [("line", np.asarray(edges, np.int64).reshape(-1, 2))]).write(path)
+        m = meshio.Mesh(pts, [("line", np.asarray(edges, np.int64).reshape(-1, 2))])
+        _write_atomic(path, lambda target: m.write(target, file_format="vtk"))
         return path
 
     def to_meshio(self):
@@ -476,11 +496,23 @@ class Mesh:
             # Curvature is not defined on the curves' extra points: NaN there.
             point_data = {k: np.concatenate([v, np.full((extra,) + v.shape[1:], np.nan if k in CURVATURE_NAMES
                                                         else 0.0)]) for k, v in point_data.items()}
-            m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data)
+            cell_data = {}
+            if fmt == "gmsh":
+                # Gmsh files with two cell types need the entity of each
+                # node and cell (meshio refuses them otherwise): the
+                # triangles are surface 1, the lines curve 2; a node is on
+                # the surface if a triangle has it.
+                dim_tags = np.tile([1, 2], (len(points), 1))
+                dim_tags[np.unique(faces)] = [2, 1]
+                point_data["gmsh:dim_tags"] = dim_tags
+                cell_data = {k: [np.ones(len(faces), int), np.full(len(lines), 2)]
+                             for k in ("gmsh:physical", "gmsh:geometrical")}
+            m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data,
+                            cell_data=cell_data)
         else:
             m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
         kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
-        m.write(path, file_format=fmt, **kwargs)
+        _write_atomic(path, lambda target: m.write(target, file_format=fmt, **kwargs), in_place=fmt == "xdmf")
         if self.singular_curves and fmt not in LINE_FORMATS:
             # The format has no line cells: the curves go to a companion
             # file beside it (all curve edges, as a VTK polyline set).
