@@ -13,6 +13,7 @@ input prints one error line and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
 import re
 import runpy
@@ -111,6 +112,8 @@ def _check_output(output: str) -> None:
     if FORMATS.get(path.suffix.lower()) is None:
         raise SurfaceError(f"cannot write {output}: unknown mesh format {path.suffix!r}: use one of "
                            f"{', '.join(sorted(FORMATS))}")
+    if FORMATS[path.suffix.lower()] == "xdmf" and importlib.util.find_spec("h5py") is None:
+        raise SurfaceError(f"cannot write {output}: .xdmf files need the package h5py (pip install h5py)")
     folder = path.parent
     if not folder.is_dir():
         raise SurfaceError(f"cannot write {output}: no folder {str(folder)!r}")

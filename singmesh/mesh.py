@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import re
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -52,11 +54,32 @@ def _write_atomic(path: Path, write: Callable[[Path], Any], in_place: bool = Fal
     target = path if in_place else path.with_name(f".{path.name}.{os.getpid()}.part")
     try:
         write(target)
+        _drop_timestamp(target)
         if not in_place:
             os.replace(target, path)
     except BaseException:
         target.unlink(missing_ok=True)
         raise
+
+
+#: meshio's PLY and OBJ writers put the time into the header's comment
+#: ("Created by meshio v5.3.5, 2026-11-25T16:16:10.995962"): the same mesh
+#: would give other bytes each time.  The time is taken out.
+_TIMESTAMP = re.compile(rb"(Created by meshio v[0-9A-Za-z.+-]*), [0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]+")
+
+
+def _drop_timestamp(path: Path) -> None:
+    """Remove meshio's time of writing from the header of the file at ``path`` (same mesh, same bytes)."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+        fixed, n = _TIMESTAMP.subn(rb"\1", head, count=1)
+        if not n:
+            return
+        rest = path.with_name(path.name + ".t")
+        with open(rest, "wb") as out:
+            out.write(fixed)
+            shutil.copyfileobj(f, out, 1 << 20)
+    os.replace(rest, path)
 
 
 class SingularPointWarning(UserWarning):
@@ -512,7 +535,10 @@ class Mesh:
         else:
             m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
         kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
-        _write_atomic(path, lambda target: m.write(target, file_format=fmt, **kwargs), in_place=fmt == "xdmf")
+        try:
+            _write_atomic(path, lambda target: m.write(target, file_format=fmt, **kwargs), in_place=fmt == "xdmf")
+        except ImportError as exc:  # XDMF needs h5py, an optional dependency of meshio
+            raise ValueError(f"writing {path.suffix} files needs the package {exc.name} (pip install {exc.name})") from None
         if self.singular_curves and fmt not in LINE_FORMATS:
             # The format has no line cells: the curves go to a companion
             # file beside it (all curve edges, as a VTK polyline set).
