@@ -157,6 +157,9 @@ def _mesh_command(argv: list[str]) -> int:
     p.add_argument("--no-improve", action="store_true",
                    help="keep the triangles as the boxes make them (vertices at the lattice crossings; "
                         "by default flips and moves on the surface make them well-shaped)")
+    p.add_argument("--max-memory", metavar="SIZE",
+                   help="refuse a request estimated to need more memory than this (e.g. 2G, 512M; "
+                        "the machine's available memory is always a limit)")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     argv, numbers = _take_box(argv)
@@ -183,6 +186,7 @@ def _mesh_command(argv: list[str]) -> int:
         box = box or DEFAULT_BOX
     sizing = {"size": args.size, "min_edge": args.min_edge, "max_edge": args.max_edge, "chord": args.chord}
     m = mesh(surface, box, coarse=args.coarse, fine=args.fine, improve=not args.no_improve, **sizing,
+             max_memory=args.max_memory,
              **({} if args.defs else params))
     print(m.report_text())
     if args.output:
