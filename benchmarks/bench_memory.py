@@ -6,7 +6,9 @@ the whole process): the resident size after the imports, the peak during
 model says of the same run (its estimate from the boxes counted level by
 level, the way the check in ``mesh()`` sees them).  The Barth sextic is run
 at the defaults (coarse 32, fine 256) and at coarse 64 / fine 512, with a
-few other points; the sphere and Cayley's cubic for comparison.
+few other points; the sphere, Cayley's cubic, the Whitney umbrella (fine
+boxes along its singular curve) and the gyroid (not a polynomial) for
+comparison.
 
 Usage::
 
@@ -33,11 +35,15 @@ SURFACES = {
     "sphere": ("x^2 + y^2 + z^2 - 1", ((-1.2, 1.2),) * 3),
     "cayley": (nodes.SURFACES["cayley"].text, nodes.SURFACES["cayley"].box),
     "barth": (nodes.SURFACES["barth"].text, nodes.SURFACES["barth"].box),
+    "umbrella": ("x^2 - y^2 z", ((-1.0, 1.0),) * 3),
+    "gyroid": ("sin(x) cos(y) + sin(y) cos(z) + sin(z) cos(x)", ((-3.0, 3.3),) * 3),
 }
 POINTS = {
     "sphere": ["32/256", "64/512", "128/1024"],
     "cayley": ["32/256", "64/512"],
-    "barth": ["16/128", "32/256", "64/256", "64/512"],
+    "barth": ["16/128", "32/256", "64/256", "64/512", "128/512"],
+    "umbrella": ["32/256", "32/1024"],
+    "gyroid": ["32/256", "64/512"],
 }
 
 CHILD = r"""
@@ -78,7 +84,7 @@ def main() -> None:
             r = run(name, coarse, fine)
             grown = r["peak"] - r["before"]
             print(f"{name:8s} {point:>11s} {r['leaves']:8d} {r['faces']:8d} {r['before'] / mb:7.0f}M "
-                  f"{r['peak'] / mb:7.0f}M {grown / mb:7.0f}M {r['estimate'] / mb:7.0f}M "
+                  f"{r['peak'] / mb:7.0f}M {grown / mb:7.0f}M {r['estimate'] / mb:7.0f}M {r['estimate'] / r['peak']:8.2f} "
                   f"{grown / max(r['leaves'], 1):7.0f} {r['time']:6.1f}s", flush=True)
 
 
