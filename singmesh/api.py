@@ -83,8 +83,7 @@ def check_box(box) -> np.ndarray:
 
 def check_defined(surf: Surface, box: np.ndarray) -> None:
     """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
-    undefined = getattr(surf, "undefined_everywhere", None)
-    if undefined is not None and undefined(box):
+    if surf.undefined_everywhere(box):
         where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
         raise SurfaceError(f"F = {surf.expr} is undefined everywhere in the box {where} "
                            "(e.g. sqrt or log of a negative number)")

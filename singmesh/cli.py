@@ -47,7 +47,7 @@ def _hide_leading_minus(argv: list[str], takes_value: set[str]) -> tuple[list[st
     out, hidden = [], {}
     value_next = False
     for word in argv:
-        if value_next or not word.startswith("-") or _OPTION.fullmatch(word) or word in ("-o", "-h") \
+        if value_next or not word.startswith("-") or _OPTION.fullmatch(word) or word[:2] in ("-o", "-h") \
                 or _is_number(word):
             value_next = word in takes_value
             out.append(word)

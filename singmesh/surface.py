@@ -309,6 +309,14 @@ class Surface(abc.ABC):
         return out
 
     # ------------------------------------------------------------ on boxes
+    def undefined_everywhere(self, box) -> bool:
+        """Whether F is certainly undefined on the whole of ``box`` (3, 2).
+
+        False for a polynomial (defined everywhere); a function of
+        restricted domain (sqrt, log, ...) proves it by its bounds.
+        """
+        return False
+
     @abc.abstractmethod
     def enclose(self, box) -> np.ndarray:
         """``data`` of the one box ``box`` (3, 2): N = 1."""

@@ -289,3 +289,16 @@ def test_cli_subprocess_one_line_no_traceback(args, words, tmp_path):
     assert "Traceback" not in r.stderr
     assert words in _one_line(r.stderr)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["-x^2-y^2+z^2+1"], ["--coarse", "8", "-x^2-y^2+z^2+1", "a=1"]])
+def test_cli_equation_with_a_leading_minus_is_not_an_option(args, tmp_path, capsys):
+    # argparse takes any word starting with '-' for an option: the equation
+    # "-x^2-y^2+z^2+1" (a hyperboloid of one sheet) is meshed, not refused.
+    out = tmp_path / "h.ply"
+    status = main(["mesh", *args, *([] if "--coarse" in args else ["--coarse", "8"]), "--fine", "16",
+                   "-o" + str(out)])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "-x**2 - y**2 + z**2 + 1" in captured.out
+    assert out.stat().st_size > 1000
