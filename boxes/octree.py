@@ -195,7 +195,8 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     return meets, inside
 
 
-def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None, refine=None):
+def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None, refine=None,
+          budget=None):
     """Subdivide boxes level by level from ``frontier`` [(level, data, corners), ...].
 
     Returns the leaves (lists of data, corners, levels, simple flags) and
@@ -240,6 +241,8 @@ def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None,
             data, corner = data[~stop], corner[~stop]
         if level == fine_level or (len(data) == 0 and not any(k > level for k in start)):
             break
+        if budget is not None:
+            budget(level, sum(map(len, leaves_l)), len(corner))
         half = 1 << (fine_level - level - 1)
         internal.append(node_keys(np.full(len(corner), level), corner >> (fine_level - level)))
         data, corner = _split_pruned(surface, data, corner, half, offsets)
@@ -317,7 +320,7 @@ def _concatenate_kept(data: np.ndarray, keep: np.ndarray, more: list) -> np.ndar
 
 def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
               keep_splitting: np.ndarray | None = None, stars: np.ndarray | None = None,
-              refine=None) -> Octree:
+              refine=None, budget=None) -> Octree:
     """Subdivide ``box`` for the surface F = 0.
 
     Every box is split down to ``coarse_level``; below it only boxes that
@@ -347,6 +350,11 @@ def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
         corners (K, 3)) that the simplicity test would stop but that are
         split further (too large for the sizing:
         :class:`singmesh.boxes.sizing.CurvatureSizing`).
+    budget : callable, optional
+        ``budget(level, leaves, frontier)``, called before each level is
+        split with the numbers of leaves made and of boxes about to be
+        split; it raises to stop a subdivision heading over the memory
+        limit (:class:`singmesh.memory.Budget`).
 
     Returns
     -------
@@ -356,7 +364,7 @@ def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,
     root = surface.enclose(box)
     frontier = [(0, root, np.zeros((1, 3), dtype=np.int64))]
     leaves_d, leaves_c, leaves_l, leaves_s, internal = _grow(
-        surface, frontier, box, coarse_level, fine_level, keep_splitting, stars, refine)
+        surface, frontier, box, coarse_level, fine_level, keep_splitting, stars, refine, budget)
     cat = lambda parts, empty: np.concatenate(parts) if parts else empty  # noqa: E731
     return Octree(
         box=box,

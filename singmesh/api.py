@@ -30,6 +30,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
+from .memory import Budget, parse_size
 from .mesh import CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
@@ -38,7 +39,8 @@ DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
 
 
 def _level(cells: int, what: str) -> int:
-    if not isinstance(cells, (int, np.integer)) or cells < 1 or cells & (cells - 1):
+    if (not isinstance(cells, (int, np.integer)) or isinstance(cells, (bool, np.bool_))
+            or cells < 1 or cells & (cells - 1)):
         raise SurfaceError(f"{what} must be a power of two (boxes per axis), not {cells!r}")
     level = int(cells).bit_length() - 1
     if level > tol.MAX_LEVEL:
@@ -63,13 +65,35 @@ def check_box(box) -> np.ndarray:
             raise SurfaceError(f"the box is inverted in {axis}: {lo:g} > {hi:g}")
         if hi == lo:
             raise SurfaceError(f"the box is empty in {axis}: {lo:g} = {hi:g}")
+    # Outside these scales the bounds and Newton steps, whose tolerances
+    # are partly absolute, lose the surface (an empty mesh, not an error).
+    size = float(np.abs(b).max())
+    if size > tol.BOX_MAX_COORD:
+        raise SurfaceError(f"the box reaches {size:g}, over the limit of {tol.BOX_MAX_COORD:g}: "
+                           "scale the equation (x -> s x) to a smaller box")
+    side = b[:, 1] - b[:, 0]
+    for axis, w in zip("xyz", side):
+        if w < tol.BOX_MIN_SIDE:
+            raise SurfaceError(f"the box is {w:g} wide in {axis}, under the limit of {tol.BOX_MIN_SIDE:g}: "
+                               "scale the equation (x -> s x) to a larger box")
+        if w < tol.BOX_MIN_RELATIVE_SIDE * size:
+            raise SurfaceError(f"the box is {w:g} wide in {axis}, too narrow for its distance {size:g} from 0 "
+                               f"(at least {tol.BOX_MIN_RELATIVE_SIDE:g} of it): shift the equation to 0")
     return b
+
+
+def check_defined(surf: Surface, box: np.ndarray) -> None:
+    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
+    if surf.undefined_everywhere(box):
+        where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
+        raise SurfaceError(f"F = {surf.expr} is undefined everywhere in the box {where} "
+                           "(e.g. sqrt or log of a negative number)")
 
 
 def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,
          size: str = "uniform",
          min_edge: float | None = None, max_edge: float | None = None, chord: float | None = None,
-         **params) -> Mesh:
+         max_memory=None, **params) -> Mesh:
     """Mesh the real surface F = 0 inside ``box``.
 
     Parameters
@@ -117,6 +141,13 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve
     chord : float, optional
         With ``size="curvature"``: the chord tolerance delta, a fraction of
         the box's longest side (default ``1e-3``).
+    max_memory : float or str, optional
+        Refuse (:class:`singmesh.memory.MemoryBudgetError`, a SurfaceError)
+        a request whose estimated peak resident size is over this many
+        bytes (or ``"512M"``, ``"2G"``); the machine's available memory is
+        always a limit.  The estimate (:mod:`singmesh.memory`) is checked
+        as the octree grows, level by level, before the boxes are made.
+        ``Mesh.stats["memory_estimate"]``: the largest estimate seen.
     **params
         Values of named parameters of the equation.
 
@@ -137,7 +168,7 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve
     # Non-polynomial F are NaN outside their domain and infinite at poles:
     # the stages handle such values, numpy need not warn of each.
     with _one_blas_thread(), np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return _mesh(surface, box, coarse, fine, improve, params, (size, min_edge, max_edge, chord))
+        return _mesh(surface, box, coarse, fine, improve, params, (size, min_edge, max_edge, chord), max_memory)
 
 
 _BLAS: list = []
@@ -156,13 +187,16 @@ def _one_blas_thread():
 
 
 def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
-          sizing=("uniform", None, None, None)) -> Mesh:
+          sizing=("uniform", None, None, None), max_memory=None) -> Mesh:
     """:func:`mesh` itself."""
     t0 = time.perf_counter()
+    if max_memory is not None:
+        parse_size(max_memory)  # a bad value is said before the work
     surf = Surface.parse(surface, **params)
     # F = G^2 H: G = 0 is no sign change; mesh G H and say so.
     surf, repeated = squarefree(surf)
     b = check_box(box)
+    check_defined(surf, b)
     coarse_level = _level(coarse, "coarse")
     fine_level = _level(fine, "fine")
     if fine_level < coarse_level:
@@ -225,7 +259,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     if levels is not None:
         side = float((b[:, 1] - b[:, 0]).max())
         refine = CurvatureSizing(surf, b, fine_level, chord=levels[2] * side, min_level=levels[1])
-    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine)
+    budget = Budget(surf.enclose(b).nbytes, coarse_level, fine_level, max_memory)
+    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine, budget=budget)
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
@@ -321,6 +356,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         "crease_gap": gap if np.isfinite(gap) else None,
         "improve": improved,
         "improve_time": t_improve,
+        "memory_estimate": budget.largest,
         "time": time.perf_counter() - t0,
     }
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,

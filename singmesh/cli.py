@@ -13,6 +13,9 @@ input prints one error line and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import os
+import re
 import runpy
 import sys
 from pathlib import Path
@@ -20,6 +23,39 @@ from pathlib import Path
 from .defs import find_definition, read_definitions
 from .errors import SurfaceError
 from .mesh import FORMATS, LINE_FORMATS
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one SurfaceError line (exit status 2), not usage text."""
+
+    def error(self, message: str):
+        if len(message) > 200:  # an unrecognized 100 kB argument: one readable line
+            message = message[:200] + "..."
+        raise SurfaceError(f"{self.prog}: {message}")
+
+
+_OPTION = re.compile(r"--[A-Za-z][A-Za-z0-9-]*(=.*)?", re.S)
+
+
+def _hide_leading_minus(argv: list[str], takes_value: set[str]) -> tuple[list[str], dict[str, str]]:
+    """``argv`` with each equation that starts with '-' (``-x^2+y^2``) replaced by a placeholder.
+
+    argparse reads any word starting with '-' as an option; here only words
+    starting with '--', '-o', '-h', and the values of options are left to
+    it (``--name`` or ``--name=value``).  Returns the new list and the placeholders' words.
+    """
+    out, hidden = [], {}
+    value_next = False
+    for word in argv:
+        if value_next or not word.startswith("-") or _OPTION.fullmatch(word) or word[:2] in ("-o", "-h") \
+                or _is_number(word):
+            value_next = word in takes_value
+            out.append(word)
+        else:
+            key = f"\0{len(hidden)}"
+            hidden[key] = word
+            out.append(key)
+    return out, hidden
 
 
 def _params(items: list[str]) -> dict[str, str]:
@@ -30,14 +66,71 @@ def _params(items: list[str]) -> dict[str, str]:
         name, value = (part.strip() for part in item.split("=", 1))
         if not name.isidentifier():
             raise SurfaceError(f"{name!r} in {item!r} is not a parameter name")
+        if name in out:
+            raise SurfaceError(f"parameter {name} is given twice ({name}={out[name]} and {item})")
         out[name] = value
     return out
+
+
+def _take_box(argv: list[str]) -> tuple[list[str], list[float] | None]:
+    """``argv`` without ``--box`` and its six numbers, and the numbers.
+
+    Taken before argparse, which reads ``-1e300`` or ``-inf`` as an option
+    (only ``-1`` and ``-1.5`` look like numbers to it).
+    """
+    if "--box" not in argv:
+        return argv, None
+    i = argv.index("--box")
+    if "--box" in argv[i + 1:]:
+        raise SurfaceError("--box is given twice")
+    given = argv[i + 1:i + 7]
+    numbers = []
+    for word in given:
+        if not _is_number(word):
+            break
+        numbers.append(float(word))
+    if len(numbers) < 6:
+        got = f"{len(numbers)} number{'s' if len(numbers) != 1 else ''}"
+        after = f", then {given[len(numbers)]!r}" if len(numbers) < len(given) else ""
+        raise SurfaceError(f"--box takes six numbers X0 X1 Y0 Y1 Z0 Z1; got {got}{after}")
+    if len(argv) > i + 7 and _is_number(argv[i + 7]):
+        raise SurfaceError(f"--box takes six numbers X0 X1 Y0 Y1 Z0 Z1; a seventh, {argv[i + 7]!r}, follows")
+    return argv[:i] + argv[i + 7:], numbers
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_output(output: str) -> None:
+    """Refuse an output path that cannot be written, before meshing."""
+    path = Path(output)
+    if FORMATS.get(path.suffix.lower()) is None:
+        raise SurfaceError(f"cannot write {output}: unknown mesh format {path.suffix!r}: use one of "
+                           f"{', '.join(sorted(FORMATS))}")
+    if FORMATS[path.suffix.lower()] == "xdmf" and importlib.util.find_spec("h5py") is None:
+        raise SurfaceError(f"cannot write {output}: .xdmf files need the package h5py (pip install h5py)")
+    folder = path.parent
+    if not folder.is_dir():
+        raise SurfaceError(f"cannot write {output}: no folder {str(folder)!r}")
+    if path.is_dir():
+        raise SurfaceError(f"cannot write {output}: it is a folder")
+    probe = folder / f".{path.name}.{os.getpid()}.probe"
+    try:  # (os.access says yes to root on a read-only mount)
+        probe.open("wb").close()
+        probe.unlink()
+    except OSError as exc:
+        raise SurfaceError(f"cannot write {output}: {exc.strerror or exc}") from None
 
 
 def _mesh_command(argv: list[str]) -> int:
     from .api import DEFAULT_BOX, mesh
 
-    p = argparse.ArgumentParser(prog="singmesh mesh", description="Mesh F(x, y, z) = 0 in a box.")
+    p = _Parser(prog="singmesh mesh", description="Mesh F(x, y, z) = 0 in a box.")
     p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
                    help='the equation, e.g. "4(x^2+y^2+z^2) + 16 x y z - 1", then parameter values '
                         "(with --defs: parameter values only)")
@@ -64,10 +157,19 @@ def _mesh_command(argv: list[str]) -> int:
     p.add_argument("--no-improve", action="store_true",
                    help="keep the triangles as the boxes make them (vertices at the lattice crossings; "
                         "by default flips and moves on the surface make them well-shaped)")
+    p.add_argument("--max-memory", metavar="SIZE",
+                   help="refuse a request estimated to need more memory than this (e.g. 2G, 512M; "
+                        "the machine's available memory is always a limit)")
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
+    argv, numbers = _take_box(argv)
+    takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
+    argv, hidden = _hide_leading_minus(argv, takes_value)
     args = p.parse_args(argv)
-    box = None if args.box is None else [args.box[0:2], args.box[2:4], args.box[4:6]]
+    args.args = [hidden.get(a, a) for a in args.args]
+    box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
+    if args.output:
+        _check_output(args.output)
     if args.defs:
         if not args.name:
             raise SurfaceError("--defs needs --name NAME: the definition to mesh (singmesh defs FILE lists them)")
@@ -84,13 +186,15 @@ def _mesh_command(argv: list[str]) -> int:
         box = box or DEFAULT_BOX
     sizing = {"size": args.size, "min_edge": args.min_edge, "max_edge": args.max_edge, "chord": args.chord}
     m = mesh(surface, box, coarse=args.coarse, fine=args.fine, improve=not args.no_improve, **sizing,
+             max_memory=args.max_memory,
              **({} if args.defs else params))
     print(m.report_text())
     if args.output:
         try:
             path = m.write(args.output, curvature=not args.no_curvature)
         except (ValueError, OSError) as exc:
-            print(f"singmesh: error: cannot write {args.output}: {exc}", file=sys.stderr)
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc).splitlines()[0]
+            print(f"singmesh: error: cannot write {args.output}: {reason}", file=sys.stderr)
             return 2
         print(f"written              {path}")
         if m.singular_curves and FORMATS.get(path.suffix.lower()) not in LINE_FORMATS:
@@ -99,7 +203,7 @@ def _mesh_command(argv: list[str]) -> int:
 
 
 def _defs_command(argv: list[str]) -> int:
-    p = argparse.ArgumentParser(prog="singmesh defs",
+    p = _Parser(prog="singmesh defs",
                                 description="List the definitions of a SingSurf .defs file.")
     p.add_argument("file")
     p.add_argument("--name", help="show this definition whole")
@@ -188,6 +292,9 @@ def main(argv: list[str] | None = None) -> int:
         return COMMANDS[argv[0]](argv[1:])
     except SurfaceError as exc:
         print(f"singmesh: error: {exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("singmesh: error: out of memory (lower --fine or --coarse, or see --max-memory)", file=sys.stderr)
         return 2
 
 

@@ -605,6 +605,18 @@ class ElementarySurface(Surface):
             return None
         return _Kink(self, "pole line", n, d, None, (), "pole")
 
+    def undefined_everywhere(self, box) -> bool:
+        """Whether F is certainly undefined on the whole of ``box`` (3, 2).
+
+        True only where interval arithmetic proves it (the argument of a
+        sqrt, log, ... is out of its domain on the whole box, as
+        ``sqrt(-1 - x^2)``); a box only partly outside the domain, or one
+        the bounds cannot decide, is False.
+        """
+        lo, hi = self.corners(self.enclose(box))
+        flo, fhi = self._value_bounds(lo, hi, centre=False)
+        return bool(np.isnan(flo[0]) or np.isnan(fhi[0]))
+
     def undefined_on(self, data: np.ndarray):
         """A subexpression of F undefined somewhere on one of the boxes, or None.
 

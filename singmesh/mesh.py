@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import re
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -38,6 +41,45 @@ def _percent(flags: np.ndarray) -> float:
 
 #: Formats whose files hold line cells beside the triangles.
 LINE_FORMATS = ("vtk", "vtu", "xdmf", "gmsh")
+
+
+def _write_atomic(path: Path, write: Callable[[Path], Any], in_place: bool = False) -> None:
+    """``write(target)``, then ``target`` renamed to ``path``: no partial file is ever at ``path``.
+
+    The target is a hidden file in the same folder (a rename within a file
+    system is atomic), removed if the writer fails.  ``in_place``: formats
+    whose file names a companion file (XDMF's ``.h5``) are written at
+    ``path`` itself, and removed on failure.
+    """
+    target = path if in_place else path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        write(target)
+        _drop_timestamp(target)
+        if not in_place:
+            os.replace(target, path)
+    except BaseException:
+        target.unlink(missing_ok=True)
+        raise
+
+
+#: meshio's PLY and OBJ writers put the time into the header's comment
+#: ("Created by meshio v5.3.5, 2026-11-25T16:16:10.995962"): the same mesh
+#: would give other bytes each time.  The time is taken out.
+_TIMESTAMP = re.compile(rb"(Created by meshio v[0-9A-Za-z.+-]*), [0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]+")
+
+
+def _drop_timestamp(path: Path) -> None:
+    """Remove meshio's time of writing from the header of the file at ``path`` (same mesh, same bytes)."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+        fixed, n = _TIMESTAMP.subn(rb"\1", head, count=1)
+        if not n:
+            return
+        rest = path.with_name(path.name + ".t")
+        with open(rest, "wb") as out:
+            out.write(fixed)
+            shutil.copyfileobj(f, out, 1 << 20)
+    os.replace(rest, path)
 
 
 class SingularPointWarning(UserWarning):
@@ -425,7 +467,8 @@ class Mesh:
 
         path = Path(path)
         pts, edges, _ = self.curve_graph
-        meshio.Mesh(pts, [("line", np.asarray(edges, np.int64).reshape(-1, 2))]).write(path)
+        m = meshio.Mesh(pts, [("line", np.asarray(edges, np.int64).reshape(-1, 2))])
+        _write_atomic(path, lambda target: m.write(target, file_format="vtk"))
         return path
 
     def to_meshio(self):
@@ -480,11 +523,26 @@ class Mesh:
             # Curvature is not defined on the curves' extra points: NaN there.
             point_data = {k: np.concatenate([v, np.full((extra,) + v.shape[1:], np.nan if k in CURVATURE_NAMES
                                                         else 0.0)]) for k, v in point_data.items()}
-            m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data)
+            cell_data = {}
+            if fmt == "gmsh":
+                # Gmsh files with two cell types need the entity of each
+                # node and cell (meshio refuses them otherwise): the
+                # triangles are surface 1, the lines curve 2; a node is on
+                # the surface if a triangle has it.
+                dim_tags = np.tile([1, 2], (len(points), 1))
+                dim_tags[np.unique(faces)] = [2, 1]
+                point_data["gmsh:dim_tags"] = dim_tags
+                cell_data = {k: [np.ones(len(faces), int), np.full(len(lines), 2)]
+                             for k in ("gmsh:physical", "gmsh:geometrical")}
+            m = meshio.Mesh(points, [("triangle", faces), ("line", lines)], point_data=point_data,
+                            cell_data=cell_data)
         else:
             m = meshio.Mesh(self.vertices, [("triangle", faces)], point_data=point_data)
         kwargs = {"binary": True} if fmt in ("ply", "stl") else {}
-        m.write(path, file_format=fmt, **kwargs)
+        try:
+            _write_atomic(path, lambda target: m.write(target, file_format=fmt, **kwargs), in_place=fmt == "xdmf")
+        except ImportError as exc:  # XDMF needs h5py, an optional dependency of meshio
+            raise ValueError(f"writing {path.suffix} files needs the package {exc.name} (pip install {exc.name})") from None
         if self.singular_curves and fmt not in LINE_FORMATS:
             # The format has no line cells: the curves go to a companion
             # file beside it (all curve edges, as a VTK polyline set).

@@ -38,7 +38,7 @@ from singmesh.skeleton.splitting import compose
 from .errors import SurfaceError
 from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation  # noqa: F401  (X, Y, Z re-exported)
-from .tolerances import CANDIDATE_DUST, MAX_DEGREE, ZERO_ULPS
+from .tolerances import CANDIDATE_DUST, MAX_DEGREE, MAX_POWER, ZERO_ULPS
 
 #: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
 CHILD_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
@@ -204,6 +204,7 @@ class Surface(abc.ABC):
             raise SurfaceError(
                 f"a surface is given as text or a sympy expression, not {type(source).__name__}"
             )
+        _check_degree_bound(expr)
         if _is_polynomial(expr):
             return PolynomialSurface._from_expr(expr, text, values, rounding)
         fraction = polynomial_fraction(expr)
@@ -308,6 +309,14 @@ class Surface(abc.ABC):
         return out
 
     # ------------------------------------------------------------ on boxes
+    def undefined_everywhere(self, box) -> bool:
+        """Whether F is certainly undefined on the whole of ``box`` (3, 2).
+
+        False for a polynomial (defined everywhere); a function of
+        restricted domain (sqrt, log, ...) proves it by its bounds.
+        """
+        return False
+
     @abc.abstractmethod
     def enclose(self, box) -> np.ndarray:
         """``data`` of the one box ``box`` (3, 2): N = 1."""
@@ -657,6 +666,51 @@ def check_variables(expr: sympy.Expr) -> None:
         )
 
 
+def _degree_bound(expr: sympy.Expr) -> int:
+    """An upper bound of the degree in x, y, z of the polynomial parts of ``expr``.
+
+    Sums take the largest, products add, integer powers multiply; the
+    argument of a function or of a fractional power is bounded on its own
+    (the largest bound met anywhere is returned), its value counts 0.
+    Computed on the tree as written, before sympy expands it.
+    """
+    worst = 0
+    seen: dict = {}  # shared subtrees (definitions used twice) once
+
+    def walk(e: sympy.Expr) -> int:
+        nonlocal worst
+        if e in seen:
+            return seen[e]
+        if e in VARIABLES:
+            d = 1
+        elif not e.free_symbols & set(VARIABLES):
+            d = 0
+        elif isinstance(e, sympy.Add):
+            d = max(walk(a) for a in e.args)
+        elif isinstance(e, sympy.Mul):
+            d = sum(walk(a) for a in e.args)
+        elif isinstance(e, sympy.Pow) and e.exp.is_Integer:
+            d = abs(int(e.exp)) * walk(e.base)
+        else:
+            for a in e.args:
+                walk(a)
+            d = 0
+        worst = max(worst, d)
+        seen[e] = d
+        return d
+
+    walk(expr)
+    return worst
+
+
+def _check_degree_bound(expr: sympy.Expr) -> None:
+    """Refuse F whose powers of x, y, z are far over ``MAX_DEGREE`` before sympy expands them."""
+    bound = _degree_bound(expr)
+    if bound > MAX_POWER:
+        raise SurfaceError(f"degree up to {bound} is over the limit of {MAX_DEGREE} "
+                           "(Bernstein forms lose too much precision beyond it)")
+
+
 def polynomial_fraction(expr: sympy.Expr):
     """(N, D), coprime polynomials with F = N / D, for a rational F that is not a polynomial; else None."""
     if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
@@ -702,7 +756,7 @@ def _to_float(c: sympy.Expr, monom) -> float:
     if value.imag != 0:
         raise SurfaceError(f"the coefficient of {term} is not real: {c}")
     if not np.isfinite(value.real):
-        raise SurfaceError(f"the coefficient of {term} is not finite: {c}")
+        raise SurfaceError(f"the coefficient of {term} is out of the range of double precision: {sympy.N(c, 4)}")
     return float(value.real)
 
 

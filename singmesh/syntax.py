@@ -33,9 +33,11 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+import numpy as np
 import sympy
 
 from .errors import SurfaceError
+from .tolerances import MAX_DEGREE, MAX_NESTING, MAX_NUMBER_EXPONENT, MAX_POWER, SOURCE_QUOTE
 
 X, Y, Z = sympy.symbols("x y z", real=True)
 VARIABLES = (X, Y, Z)
@@ -98,7 +100,13 @@ def syntax_error(text: str, pos: int, message: str) -> SurfaceError:
     start = text.rfind("\n", 0, pos) + 1
     end = text.find("\n", pos)
     source = text[start:end if end >= 0 else len(text)].rstrip()
-    err = SurfaceError(f"{message} at {where} in {source!r}" if source.strip() else f"{message} at {where}")
+    # One readable line however long the input: the line quoted around
+    # the place, at most SOURCE_QUOTE characters of it.
+    shown = source
+    if len(source) > SOURCE_QUOTE:
+        lo = max(0, min(column - 1 - SOURCE_QUOTE // 2, len(source) - SOURCE_QUOTE))
+        shown = ("..." if lo else "") + source[lo:lo + SOURCE_QUOTE] + ("..." if lo + SOURCE_QUOTE < len(source) else "")
+    err = SurfaceError(f"{message} at {where} in {shown!r}" if source.strip() else f"{message} at {where}")
     err.reason, err.line, err.column, err.source = message, line, column, source
     return err
 
@@ -204,6 +212,7 @@ class Parser:
     names: frozenset
     i: int = 0
     uses: dict = field(default_factory=dict)
+    depth: int = 0
 
     # -- helpers
     def peek(self) -> Token:
@@ -259,12 +268,21 @@ class Parser:
                 return sympy.Mul(*factors) if len(factors) > 1 else factors[0]
 
     def unary(self) -> sympy.Expr:
+        # Every nesting (brackets, signs, exponents) passes here: deeper
+        # than MAX_NESTING is refused before Python's or sympy's recursion
+        # limit is met (a RecursionError is no message for a user).
         t = self.peek()
-        if t.kind == "op" and t.text in "+-":
-            self.take()
-            e = self.unary()
-            return -e if t.text == "-" else e
-        return self.power()
+        if self.depth >= MAX_NESTING:
+            raise self.error(t, f"the expression nests brackets, signs or powers more than {MAX_NESTING} deep")
+        self.depth += 1
+        try:
+            if t.kind == "op" and t.text in "+-":
+                self.take()
+                e = self.unary()
+                return -e if t.text == "-" else e
+            return self.power()
+        finally:
+            self.depth -= 1
 
     def power(self) -> sympy.Expr:
         base = self.primary()
@@ -274,6 +292,9 @@ class Parser:
             exponent = self.unary()  # right-associative, x^-1 allowed
             if base == 0 and exponent.is_negative:
                 raise self.error(t, "division by zero")
+            problem = _power_problem(base, exponent)
+            if problem:
+                raise self.error(t, problem)
             return base ** exponent
         return base
 
@@ -340,6 +361,26 @@ def _describe(t: Token) -> str:
     if t.kind == "end":
         return "the end of the expression"
     return f"{t.kind} {t.text!r}" if t.kind != "op" else repr(t.text)
+
+
+def _power_problem(base: sympy.Expr, exponent: sympy.Expr) -> str | None:
+    """Why ``base ** exponent`` is refused, or None.
+
+    A power of two numbers is computed exactly by sympy (``9^9^9`` has 370
+    million digits), and one of a polynomial in x, y, z is expanded: both
+    are refused before they are computed when they are out of reach.
+    """
+    if not (exponent.is_number and exponent.is_real):
+        return None
+    e = abs(float(exponent))
+    if base.is_number:
+        b = abs(complex(sympy.N(base, 15)))
+        digits = float(exponent) * np.log10(b) if b not in (0.0, 1.0) and np.isfinite(b) else 0.0
+        if abs(digits) > MAX_NUMBER_EXPONENT:
+            return f"the number {base}^{exponent} is out of the range of double precision (about 10^{digits:.0f})"
+    elif base.free_symbols & set(VARIABLES) and e > MAX_POWER:
+        return f"the power {exponent} of {base} is over the degree limit of {MAX_DEGREE}"
+    return None
 
 
 def _number(text: str) -> sympy.Expr:

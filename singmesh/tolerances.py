@@ -8,6 +8,44 @@ Each value says what it protects against.  Change them here only.
 #: guaranteed any more.
 MAX_DEGREE = 18
 
+#: Deepest nesting of brackets, signs and exponents the parser reads (a
+#: recursive descent: each level costs a few Python frames, and sympy
+#: recurses over the tree again; Python's limit is 1000 frames).
+MAX_NESTING = 150
+
+#: Largest integer power of an expression in x, y, z the parser builds:
+#: sympy expands it exactly ((x+y+z)^1000 has half a million terms and
+#: takes minutes) before the degree is checked against ``MAX_DEGREE``.
+#: Above ``MAX_DEGREE`` so that a power which cancels ((x+1)^20 - (x+1)^20
+#: + x) still reads.
+MAX_POWER = 4 * MAX_DEGREE
+
+#: Largest decimal exponent of a power of numbers the parser computes
+#: (sympy computes them exactly: 9^9^9 has 370 million digits).  Doubles
+#: end at 10^308; a product of such numbers may come back in range.
+MAX_NUMBER_EXPONENT = 1000
+
+#: Largest |coordinate| of a box.  Several tolerances (Newton residuals,
+#: the singular point search) are partly absolute: Cayley's cubic scaled by
+#: 1e9 loses its nodes and a unit sphere centred at x = 1e9 comes out
+#: empty, both silently; at 1e8 they are still right.  Refused above this
+#: (with a factor 100 of room) rather than meshed wrong.
+BOX_MAX_COORD = 1e6
+
+#: Smallest side of a box.  A degree-18 polynomial scaled to a box of side
+#: s has coefficients of about s^18: under 1e-16 they leave the range of
+#: doubles (1e-308); a sextic scaled by 1e-60 comes out empty.
+BOX_MIN_SIDE = 1e-12
+
+#: Smallest side of a box relative to its largest |coordinate|: the fine
+#: lattice (up to 2^14 cells) must stay far above the doubles' spacing
+#: there (a unit box at 1e6 is at the limit).
+BOX_MIN_RELATIVE_SIDE = 1e-6
+
+#: Characters of the offending line quoted in a syntax error (the rest is
+#: "..."): one readable line for a 100 kB input.
+SOURCE_QUOTE = 60
+
 #: Deepest subdivision: boxes per axis at the finest level is at most
 #: ``2**MAX_LEVEL``.  Keeps integer lattice keys well inside int64.
 MAX_LEVEL = 14

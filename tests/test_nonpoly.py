@@ -210,9 +210,18 @@ def test_inverse_square_sphere():
     assert np.abs(np.linalg.norm(m.vertices, axis=1) - 1).max() < 1e-12
 
 
+@pytest.mark.parametrize("text", ["sqrt(-1 - x^2) + y", "log(-1 - x^2) + y"])
+def test_f_undefined_on_the_whole_box_is_refused(text):
+    # No point of the box is in F's domain (interval arithmetic proves it):
+    # bad input, said in one line, not an empty mesh (issue #13).
+    with pytest.raises(singmesh.SurfaceError, match="undefined everywhere in the box"):
+        singmesh.mesh(text, B1, coarse=8, fine=16)
+
+
 @pytest.mark.parametrize("text, words", [
-    ("sqrt(-1 - x^2) + y", "undefined everywhere"),
-    ("log(-1 - x^2) + y", "undefined everywhere"),
+    # undefined everywhere, but interval arithmetic cannot prove it (x y
+    # against x^2 + y^2): meshed, empty, said.
+    ("sqrt(x y - x^2 - y^2 - 1) + z", "undefined everywhere"),
     ("exp(x) + 1", "does not meet the box.*positive"),
     ("x^2 + y^2 + z^2 + 1", "does not meet the box.*positive"),
 ])

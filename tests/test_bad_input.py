@@ -1,0 +1,304 @@
+"""Bad input, every kind of it (issue #13): one line naming the problem.
+
+Each case goes through the Python API (``singmesh.mesh`` raises a
+``SurfaceError``, a ``ValueError``, whose message is one line with the
+words expected) and through the command line (``singmesh mesh ...``: exit
+status 2, one line on stderr, no traceback, no output file left behind).
+The command line runs in-process through ``main()`` (a traceback there is an
+exception the test sees); a few cases run as real subprocesses too.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import singmesh
+from singmesh import SurfaceError
+from singmesh.cli import main
+
+SPHERE = "x^2 + y^2 + z^2 - 1"
+B = ((-1.5, 1.5),) * 3
+SMALL = {"coarse": 8, "fine": 16}
+SMALL_CLI = ["--coarse", "8", "--fine", "16"]
+
+DEFS = """\
+<definition name="Sphere" type="asurf">
+x^2 + y^2 + z^2 - r^2;
+<parameter name="r" value="0.75" />
+</definition>
+<definition name="Broken" type="asurf">
+x^2 + y^2 - ;
+</definition>
+"""
+OPEN_DEFS = DEFS + """<definition name="Open" type="asurf">
+x^2 + y^2 - z^2;
+"""
+
+
+def _box(*numbers) -> list[str]:
+    return ["--box", *map(str, numbers)]
+
+
+# (id, API call (surface, box, keyword arguments) or None, command-line
+# arguments after "mesh" (the output file is added) or None, words of the message)
+CASES = [
+    # --- syntax errors, at every position
+    ("leading operator", ("* x + y", B, {}), ["* x + y"], r"unexpected '\*' at column 1"),
+    ("trailing operator", ("x + y -", B, {}), ["x + y -"], "unexpected end of the expression at column 8"),
+    ("unclosed bracket", ("(x + y", B, {}), ["(x + y"], r"expected '\)'"),
+    ("unopened bracket", ("x + y)", B, {}), ["x + y)"], r"unexpected '\)' at column 6"),
+    ("empty string", ("", B, {}), [""], "the equation is empty"),
+    ("only spaces", ("   \t ", B, {}), ["   \t "], "the equation is empty"),
+    ("power without exponent", ("x^", B, {}), ["x^"], "unexpected end of the expression at column 3"),
+    ("** without exponent", ("2**", B, {}), ["2**"], "unexpected end of the expression"),
+    ("two powers in a row", ("x y ^ ^ z", B, {}), ["x y ^ ^ z"], r"unexpected '\^' at column 7"),
+    ("stray comma", ("x, y", B, {}), ["x, y"], "unexpected ',' at column 2"),
+    ("empty brackets", ("x + ()", B, {}), ["x + ()"], "empty parentheses"),
+    ("two equals signs", ("x = y = z", B, {}), ["x = y = z"], "more than one '='"),
+    ("comparison", ("x > y", B, {}), ["x > y"], "unexpected character '>'"),
+    # --- names
+    ("unknown symbol", ("x + q y", B, {}), ["x + q y"], "unknown symbol q"),
+    ("undefined parameter", ("x^2 + y^2 - a z", B, {}), ["x^2 + y^2 - a z"], "unknown symbol a"),
+    ("unknown function", ("gamma(x) + y", B, {}), ["gamma(x) + y"], "unknown function gamma"),
+    ("function with two arguments", ("sin(x, y) + z", B, {}), ["sin(x, y) + z"], "cannot apply sin"),
+    ("definitions in a cycle", ("a x + y; a = b; b = a", B, {}), ["a x + y; a = b; b = a"], "in a cycle"),
+    ("variable given a value", (SPHERE, B, {"x": 1}), [SPHERE, "x=1"], "x is a variable"),
+    # --- F undefined on the whole box
+    ("sqrt undefined on the box", ("sqrt(-1 - x^2) + y", B, {}), ["sqrt(-1 - x^2) + y"],
+     "undefined everywhere in the box"),
+    ("log undefined on the box", ("log(-x^2 - 1) + z", B, {}), ["log(-x^2 - 1) + z"],
+     "undefined everywhere in the box"),
+    # --- polynomials with no surface
+    ("zero polynomial", ("0", B, {}), ["0"], "identically zero"),
+    ("cancels to zero", ("(x+y)^2 - x^2 - 2 x y - y^2", B, {}), ["(x+y)^2 - x^2 - 2 x y - y^2"],
+     "identically zero"),
+    ("cancels to a constant", ("(x+1)^2 - x^2 - 2 x", B, {}), ["(x+1)^2 - x^2 - 2 x"], "nonzero constant"),
+    # --- NaN and infinity
+    ("nan in the equation", ("x + nan", B, {}), ["x + nan"], "NaN or infinite"),
+    ("infinity in the equation", ("x^2 + oo y", B, {}), ["x^2 + oo y"], "NaN or infinite"),
+    ("coefficient over doubles", ("x^2 - 1e400", B, {}), ["x^2 - 1e400"], "out of the range of double"),
+    ("number power over doubles", ("x^2 - 10^100000", B, {}), ["x^2 - 10^100000"], "out of the range of double"),
+    ("nan parameter", ("x^2 + y^2 - a", B, {"a": float("nan")}), ["x^2 + y^2 - a", "a=nan"],
+     "not a finite real number"),
+    ("nan in the box", (SPHERE, ((np.nan, 1), (-1, 1), (-1, 1)), {}), [SPHERE, *_box("nan", 1, -1, 1, -1, 1)],
+     "non-finite bound"),
+    ("infinity in the box", (SPHERE, ((-np.inf, 1), (-1, 1), (-1, 1)), {}),
+     [SPHERE, *_box("-inf", 1, -1, 1, -1, 1)], "non-finite bound"),
+    # --- degree
+    ("degree over the limit", ("x^19 + y - 1", B, {}), ["x^19 + y - 1"], "degree 19 is over the limit of 18"),
+    ("expanded degree over the limit", ("(x + y + z + 1)^19", B, {}), ["(x + y + z + 1)^19"],
+     "degree 19 is over the limit"),
+    ("huge power", ("(x + y + z)^1000 - 1", B, {}), ["(x + y + z)^1000 - 1"], "over the degree limit"),
+    ("huge power of a definition", ("X^1000 - 1; X = x + y + z", B, {}), ["X^1000 - 1; X = x + y + z"],
+     "degree up to 1000 is over the limit"),
+    # --- boxes
+    ("inverted box", (SPHERE, ((1, -1), (-1, 1), (-1, 1)), {}), [SPHERE, *_box(1, -1, -1, 1, -1, 1)],
+     "inverted in x"),
+    ("box of zero width", (SPHERE, ((-1, 1), (0.5, 0.5), (-1, 1)), {}), [SPHERE, *_box(-1, 1, 0.5, 0.5, -1, 1)],
+     "empty in y"),
+    ("too few box numbers", (SPHERE, ((-1, 1), (-1, 1), (-1,)), {}), [SPHERE, *_box(-1, 1, -1, 1, -1)],
+     "(three .lo, hi. pairs|six numbers)"),
+    ("too many box numbers", (SPHERE, [-1, 1] * 4, {}), [SPHERE, "--box", *["-1", "1"] * 3, "7"],
+     "(three .lo, hi. pairs|a seventh)"),
+    ("non-numeric box", (SPHERE, (("a", 1), (-1, 1), (-1, 1)), {}), [SPHERE, *_box("a", 1, -1, 1, -1, 1)],
+     "(three .lo, hi. pairs|six numbers)"),
+    ("huge box", (SPHERE, ((-1e300, 1e300),) * 3, {}), [SPHERE, *_box(*[-1e300, 1e300] * 3)],
+     "over the limit of 1e\\+06"),
+    ("tiny box", (SPHERE, ((-1e-300, 1e-300),) * 3, {}), [SPHERE, *_box(*[-1e-300, 1e-300] * 3)],
+     "under the limit of 1e-12"),
+    ("narrow box far out", (SPHERE, ((1e5, 1e5 + 1e-3), (-1, 1), (-1, 1)), {}),
+     [SPHERE, *_box(1e5, 1e5 + 1e-3, -1, 1, -1, 1)], "too narrow for its distance"),
+    # --- resolution
+    ("coarse not a power of two", (SPHERE, B, {"coarse": 30}), [SPHERE, "--coarse", "30"],
+     "coarse must be a power of two"),
+    ("fine not a power of two", (SPHERE, B, {"fine": 100}), [SPHERE, "--fine", "100"],
+     "fine must be a power of two"),
+    ("coarse zero", (SPHERE, B, {"coarse": 0}), [SPHERE, "--coarse", "0"], "coarse must be a power of two"),
+    ("coarse negative", (SPHERE, B, {"coarse": -8}), [SPHERE, "--coarse", "-8"], "coarse must be a power of two"),
+    ("coarse not an integer", (SPHERE, B, {"coarse": 8.5}), [SPHERE, "--coarse", "8.5"],
+     "(power of two|invalid int value)"),
+    ("coarse a boolean", (SPHERE, B, {"coarse": True}), None, "coarse must be a power of two"),
+    ("fine over the limit", (SPHERE, B, {"fine": 1 << 20}), [SPHERE, "--fine", str(1 << 20)],
+     "over the limit of 16384"),
+    ("fine below coarse", (SPHERE, B, {"coarse": 32, "fine": 16}), [SPHERE, "--coarse", "32", "--fine", "16"],
+     r"fine \(16\) must be at least coarse \(32\)"),
+    ("unknown size", (SPHERE, B, {"size": "small"}), [SPHERE, "--size", "small"], "(size must be|invalid choice)"),
+    ("negative chord", (SPHERE, B, {"size": "curvature", "chord": -1.0}),
+     [SPHERE, "--size", "curvature", "--chord", "-1"], "chord is a fraction"),
+    # --- very long input
+    ("very long input, unclosed", ("(" + " + ".join(["x y z"] * 12500), B, {}),
+     ["(" + " + ".join(["x y z"] * 12500)], r"expected '\)'"),
+    ("deep brackets", ("(" * 20000 + "x" + ")" * 20000, B, {}), ["(" * 20000 + "x" + ")" * 20000],
+     "nests brackets, signs or powers more than"),
+    ("power tower", ("x" + "^2" * 5000, B, {}), ["x" + "^2" * 5000], "nests brackets, signs or powers"),
+    ("many signs", ("-" * 50000 + "x", B, {}), ["-" * 50000 + "x"], "nests brackets, signs or powers"),
+    # --- characters
+    ("control character", ("x\x01 + y", B, {}), ["x\x01 + y"], r"unexpected character \(U\+0001\)"),
+    ("NUL character", ("x^2\x00 + y", B, {}), ["x^2\x00 + y"], r"unexpected character \(U\+0000\)"),
+    ("undecodable byte", ("x + y\udcff", B, {}), ["x + y\udcff"], r"unexpected character \(U\+DCFF\)"),
+    ("not text", (b"x^2 + y^2 - 1", B, {}), None, "given as text or a sympy expression, not bytes"),
+    # --- parameters on the command line
+    ("parameter twice", None, ["x^2 + y^2 - a", "a=1", "a=2"], "parameter a is given twice"),
+    ("parameter without value", ("x^2 + y^2 - a", B, {"a": ""}), ["x^2 + y^2 - a", "a="], "it is empty"),
+    ("parameter without name", None, ["x^2 + y^2 - a", "=1"], "is not a parameter name"),
+    ("parameter not name=value", None, [SPHERE, "a"], "name=value"),
+    ("non-numeric parameter", ("x^2 + y^2 - a", B, {"a": object()}), ["x^2 + y^2 - a", "a=1+"],
+     "(is not a number|syntax error)"),
+    ("unknown option", None, [SPHERE, "--frobnicate"], "unrecognized arguments: --frobnicate"),
+    ("long unknown option", None, [SPHERE, "--" + "x" * 100000], "unrecognized arguments: --xxx"),
+    # --- definition files
+    ("defs file missing", None, ["--defs", "{tmp}/missing.defs", "--name", "Sphere"], "cannot read"),
+    ("defs file a folder", None, ["--defs", "{tmp}", "--name", "Sphere"], "cannot read"),
+    ("defs unknown name", None, ["--defs", "{defs}", "--name", "Spheer"], "no definition named 'Spheer'.*'Sphere'"),
+    ("defs malformed equation", None, ["--defs", "{defs}", "--name", "Broken"], "line 6.*syntax error"),
+    ("defs definition not closed", None, ["--defs", "{open}", "--name", "Open"], "not closed"),
+    ("defs without name", None, ["--defs", "{defs}"], "--defs needs --name"),
+    ("defs parameter twice", None, ["--defs", "{defs}", "--name", "Sphere", "s=1", "s=2"], "given twice"),
+]
+
+
+def _cli(args: list[str], tmp_path: Path, output: str = "out.ply") -> tuple[list[str], Path]:
+    defs = tmp_path / "s.defs"
+    defs.write_text(DEFS)
+    (tmp_path / "open.defs").write_text(OPEN_DEFS)
+    args = [a.replace("{tmp}", str(tmp_path)).replace("{defs}", str(defs)).replace("{open}", str(tmp_path / "open.defs"))
+            for a in args]
+    out = tmp_path / output
+    return args, out
+
+
+def _one_line(text: str) -> str:
+    lines = text.strip().splitlines()
+    assert len(lines) == 1, lines[:5]
+    return lines[0]
+
+
+def test_at_least_thirty_kinds():
+    assert len(CASES) >= 30
+    assert len({c[0] for c in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize("name, api, cli, words", [c for c in CASES if c[1] is not None],
+                         ids=[c[0] for c in CASES if c[1] is not None])
+def test_api_refuses_in_one_line(name, api, cli, words):
+    surface, box, kwargs = api
+    with pytest.raises(SurfaceError) as info:
+        singmesh.mesh(surface, box, **{**SMALL, **kwargs})
+    assert isinstance(info.value, ValueError)
+    message = _one_line(str(info.value))
+    assert __import__("re").search(words, message), message
+    assert len(message) < 400, message
+
+
+@pytest.mark.parametrize("name, api, cli, words", [c for c in CASES if c[2] is not None],
+                         ids=[c[0] for c in CASES if c[2] is not None])
+def test_cli_refuses_in_one_line(name, api, cli, words, tmp_path, capsys):
+    args, out = _cli(cli, tmp_path)
+    extra = [] if "--coarse" in args or "--fine" in args else SMALL_CLI
+    status = main(["mesh", *args, *extra, "-o", str(out)])
+    captured = capsys.readouterr()
+    assert status == 2
+    line = _one_line(captured.err)
+    assert line.startswith("singmesh: error: "), line
+    assert __import__("re").search(words, line), line
+    assert len(line) < 400, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["open.defs", "s.defs"]  # no file, no partial file
+
+
+@pytest.mark.parametrize("output, words", [
+    ("missing/out.ply", "no folder"),
+    ("out.xyz", "unknown mesh format '.xyz'"),
+    ("out", "unknown mesh format ''"),
+    (".", "unknown mesh format|is a folder"),
+])
+def test_cli_refuses_bad_output_before_meshing(output, words, tmp_path, capsys):
+    status = main(["mesh", SPHERE, *SMALL_CLI, "-o", str(tmp_path / output)])
+    captured = capsys.readouterr()
+    assert status == 2
+    assert words.split("|")[0] in _one_line(captured.err) or words.split("|")[-1] in captured.err
+    assert "vertices" not in captured.out  # refused before meshing: no report
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(os.name != "posix" or not Path("/proc/self").exists(), reason="needs Linux /proc")
+def test_cli_unwritable_output(capsys):
+    # /proc takes no new files, even from root (who may write anywhere else).
+    status = main(["mesh", SPHERE, *SMALL_CLI, "-o", "/proc/singmesh-test.ply"])
+    assert status == 2
+    assert "cannot write /proc/singmesh-test.ply" in _one_line(capsys.readouterr().err)
+
+
+def test_failing_writer_leaves_no_partial_file(tmp_path, monkeypatch):
+    # The writer fails half-way (a full disk): the file is not left behind,
+    # and neither is the temporary one.
+    import meshio
+
+    m = singmesh.mesh(SPHERE, B, **SMALL)
+    out = tmp_path / "s.vtu"
+    out.write_bytes(b"the previous file")
+
+    def broken(self, path, *args, **kwargs):
+        Path(path).write_bytes(b"half a mesh")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(meshio.Mesh, "write", broken)
+    with pytest.raises(OSError):
+        m.write(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.vtu"]
+    assert out.read_bytes() == b"the previous file"
+
+
+def test_msh_with_line_cells(tmp_path):
+    # The Whitney umbrella's handle is an isolated line: line cells beside
+    # the triangles, which meshio writes to Gmsh only with node entities.
+    import meshio
+
+    m = singmesh.mesh("x^2 - y^2 z", ((-1, 1),) * 3, coarse=8, fine=32)
+    points, lines = m.curve_lines()
+    assert len(lines)
+    out = tmp_path / "u.msh"
+    m.write(out)
+    back = meshio.read(out)
+    tri = [c.data for c in back.cells if c.type == "triangle"][0]
+    seg = [c.data for c in back.cells if c.type == "line"][0]
+    # Gmsh orders the nodes by entity: compare the cells' coordinates.
+    key = lambda a: np.sort(np.round(a, 12).reshape(len(a), -1), axis=0)  # noqa: E731
+    np.testing.assert_array_equal(key(back.points[tri].reshape(len(tri), -1)),
+                                  key(points[m.faces].reshape(len(m.faces), -1)))
+    assert len(seg) == len(lines)
+    np.testing.assert_allclose(np.sort(back.points[seg].reshape(-1, 3), axis=0),
+                               np.sort(points[lines].reshape(-1, 3), axis=0))
+
+
+@pytest.mark.parametrize("args, words", [
+    (["x^2 + y^2 - a", "a=1", "a=2"], "given twice"),
+    (["gamma(x) + y"], "unknown function gamma"),
+    ([SPHERE, "--box", "-1e300", "1e300", "-1", "1", "-1", "1"], "over the limit"),
+])
+def test_cli_subprocess_one_line_no_traceback(args, words, tmp_path):
+    out = tmp_path / "o.ply"
+    r = subprocess.run([sys.executable, "-m", "singmesh.cli", "mesh", *args, *SMALL_CLI, "-o", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    assert words in _one_line(r.stderr)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["-x^2-y^2+z^2+1"], ["--coarse", "8", "-x^2-y^2+z^2+1", "a=1"]])
+def test_cli_equation_with_a_leading_minus_is_not_an_option(args, tmp_path, capsys):
+    # argparse takes any word starting with '-' for an option: the equation
+    # "-x^2-y^2+z^2+1" (a hyperboloid of one sheet) is meshed, not refused.
+    out = tmp_path / "h.ply"
+    status = main(["mesh", *args, *([] if "--coarse" in args else ["--coarse", "8"]), "--fine", "16",
+                   "-o" + str(out)])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "-x**2 - y**2 + z**2 + 1" in captured.out
+    assert out.stat().st_size > 1000
