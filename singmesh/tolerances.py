@@ -406,8 +406,9 @@ CURVE_TANGENT_RADIUS = 10.0
 #: The tube's links on the box's faces continue its rails (a half-sheet
 #: that leaves the tube through the box), except where a curve meets the
 #: box: its half-sheets' traces on the face meet there, and their rails
-#: end on the box, joined to the curve's end.  "There" is the tube's reach
-#: (radius and growth) and this many cells more.
+#: end on the box, joined to the curve's end.  "There" is the tube's radius
+#: and this many cells more (not its growth: a half-sheet between a curve
+#: and a face a few cells away leaves the tube only through that face).
 CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
 
 #: Across a curve whose branches are tangent (A_k, k >= 3) the tube
