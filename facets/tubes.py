@@ -106,12 +106,9 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     on_box = _faces_of(curves.points, box).any(axis=1)
     far = np.ones(len(events.point), bool)
     if on_box.any():
-        # The tube's radius there (wider along tangent branches), not its
-        # growth: a curve running within the growth of a face (a line 0-0.1
-        # from x = -0.5 with cells of 1/64) has a half-sheet between it and
-        # the face whose whole rail is face links that near its ends.
+        # The whole tube's reach there (wider along tangent branches).
         radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
-        keep_off = (radius + tol.CURVE_FACE_RAIL) * cell
+        keep_off = (radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL) * cell
         far = cKDTree(curves.points[on_box]).query(events.point, distance_upper_bound=keep_off)[0] > keep_off
     # Along creases the rails' snaps never step back (see strip_triangles).
     steady = np.zeros(len(curves.points), bool)

@@ -335,6 +335,12 @@ CURVE_SVD_FLOOR = 1e-11
 #: the distance it may move (the points are then at rounding level).
 CURVE_STOP = 1e-13
 
+#: Rounds of Newton onto a curve and a slide onto the box's face that
+#: place a curve's end on the box (each shrinks the slide by about the
+#: curvature times the step; they stop once the slide is below CURVE_STOP
+#: of the step).
+CURVE_CLIP_ROUNDS = 30
+
 #: Other changes of type (read from the arcs on a circle, which blur
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3
@@ -406,9 +412,8 @@ CURVE_TANGENT_RADIUS = 10.0
 #: The tube's links on the box's faces continue its rails (a half-sheet
 #: that leaves the tube through the box), except where a curve meets the
 #: box: its half-sheets' traces on the face meet there, and their rails
-#: end on the box, joined to the curve's end.  "There" is the tube's radius
-#: and this many cells more (not its growth: a half-sheet between a curve
-#: and a face a few cells away leaves the tube only through that face).
+#: end on the box, joined to the curve's end.  "There" is the tube's reach
+#: (radius and growth) and this many cells more.
 CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
 
 #: Across a curve whose branches are tangent (A_k, k >= 3) the tube

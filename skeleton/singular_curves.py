@@ -371,12 +371,21 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     # Newton held in the face's plane stalls on a tangent-sheet curve that
     # meets the face obliquely: Newton across the curve, then along it
     # onto the face (the curve is straight to rounding over that slide).
+    # The slide along the chord's direction t, not the curve's tangent,
+    # leaves the point off the curve by the slide times their angle (about
+    # the curvature times h): each round shrinks the slide by that factor
+    # only, so the rounds go on until the slide is at rounding level (three
+    # left curve ends 1e-7 to 3e-5 of the box off the surface).
     t = _unit(d)
     z = q
-    for _ in range(3):
+    for _ in range(tol.CURVE_CLIP_ROUNDS):
         z = _correct(surface, z[None], t[None], h)[0][0]
-        if abs(t[axis]) > 1e-3:
-            z = z + t * (value - z[axis]) / t[axis]
+        if abs(t[axis]) <= 1e-3:
+            break
+        slide = t * (value - z[axis]) / t[axis]
+        z = z + slide
+        if not np.linalg.norm(slide) > tol.CURVE_STOP * h:
+            break
     z[axis] = value
     return np.clip(z, box[:, 0], box[:, 1])
 

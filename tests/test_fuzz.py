@@ -24,20 +24,46 @@ KNOWN = {
     "s2-2-product-symmetric": "open edges where the cone y z = x^2 (scaled) meets the other factor",
     "s2-6-product-unit": "open edges on the x-axis through the quadric cone's apex",
     "s2-66-product-unit": "edges with six triangles near f1's singular point at the origin",
-    "s2-94-product-random": "a vertex of the double curve 1.2e-7 of the box off the surface",
+    "s2-94-product-random": "a double-curve edge with six triangles at its end on the face z = -1.054",
 }
 
 
 #: Failures the fuzzing found and were fixed: (name, equation as typed, box,
 #: coarse, fine).  The judge is the sample's.
 REGRESSIONS = [
-    # Two planes crossing along a line that runs 0-0.1 from the face
-    # x = -0.5: the half-sheet between the line and that face left the tube
-    # only through the box, its rail was all face links near the line's
-    # ends, all dropped: 19 line edges with 3 triangles (facets/tubes.py).
+    # The double curve's ends on the box were placed by three rounds of
+    # Newton and a slide along the chord, 1.8e-6 and 3.1e-5 of the box off
+    # the two sheets (skeleton/singular_curves.py _clip).
+    ("s1-954 curve end on the box",
+     "(1.85703211655165*y*z - 0.412406314921561*y^2 - 1.21492690973525*x*z + 0.681677646659092)"
+     "*(5*y^2*z + 4/5*x^2 + 1*z + 2/3)", ((-1.0, 1.0),) * 3, 8, 64),
+    ("s1-618 curve ends on z = -1",
+     "(7*y^3 + 2*x*y*z + 1/4*z + 1/2*y)*(6/7*z^3 + 4/7*y^2*z - 4/3*x*y*z - 3*x*y^2 - 1/2*y*z - 3*x^2 + 8/7)",
+     ((-1.0, 1.0),) * 3, 8, 64),
+]
+
+
+#: Failures found and not fixed, kept to show them (strict xfail: the test
+#: fails once they pass).  Both planes' line runs 0-0.1 from the face
+#: x = -0.5 (fine 64: within the tube's growth of it), ending on it and on
+#: y = -1: the half-sheet between the line and that face leaves the tube
+#: only through the box, all its face links lie within the tube's reach of
+#: the two ends and are dropped (facets.tubes.tube_triangles), so it has no
+#: rail: 19 line edges with 3 triangles.  Counting face links from the
+#: tube's radius on fixes it, but adds half-sheet pieces between two ends
+#: on one face (fuzz s1-354) and a zero-area triangle (s2-30): not done.
+OPEN = [
     ("s1-38 planes along a face", "(-5*z + 4/5*y + 7/4*x + 5/2)*(-5/4*z - 6/7*y - 6*x - 3)",
      ((-0.5, 0.5), (-1.0, 1.0), (-1.5, 1.5)), 8, 64),
 ]
+
+
+@pytest.mark.parametrize("name, text, box, coarse, fine", OPEN, ids=[r[0] for r in OPEN])
+@pytest.mark.xfail(strict=True, reason="a half-sheet between a double curve and a near face has no rail")
+def test_fuzz_open_failure(name, text, box, coarse, fine):
+    case = fc.case_from_text(name, text, box)
+    v = fc.judge(case, coarse, fine)
+    assert v.status == "clean", f"{text} on {box}: {v.detail}"
 
 
 @pytest.mark.parametrize("name, text, box, coarse, fine", REGRESSIONS, ids=[r[0] for r in REGRESSIONS])
