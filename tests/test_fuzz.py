@@ -40,6 +40,12 @@ REGRESSIONS = [
     ("s1-618 curve ends on z = -1",
      "(7*y^3 + 2*x*y*z + 1/4*z + 1/2*y)*(6/7*z^3 + 4/7*y^2*z - 4/3*x*y*z - 3*x*y^2 - 1/2*y*z - 3*x^2 + 8/7)",
      ((-1.0, 1.0),) * 3, 8, 64),
+    # The chord from the last vertex inside to the first outside runs nearly
+    # along the face y = 0.3517 and the curve bulges out of the box between:
+    # rounds that do not shrink the slide wandered along the face (three
+    # curve vertices outside the box, one 1.7e-4 of the box off F = 0).  The
+    # case keeps other failures: only "outside-box" is checked.
+    ("s1-394 chord along the face", None, None, 8, 64),
 ]
 
 
@@ -68,6 +74,11 @@ def test_fuzz_open_failure(name, text, box, coarse, fine):
 
 @pytest.mark.parametrize("name, text, box, coarse, fine", REGRESSIONS, ids=[r[0] for r in REGRESSIONS])
 def test_fuzz_regression(name, text, box, coarse, fine):
+    if text is None:  # a case of the generator, judged on one class
+        case = fc.make_case(1, int(name.split()[0].split("-")[1]))
+        v = fc.judge(case, coarse, fine)
+        assert "outside-box" not in v.failures and "exception" not in v.failures, v.detail
+        return
     case = fc.case_from_text(name, text, box)
     v = fc.judge(case, coarse, fine)
     assert v.status == "clean", f"{text} on {box}: {v.detail}"
