@@ -3,7 +3,7 @@ PY      := .venv/bin/python
 STAMP   := .venv/.installed
 EXAMPLE ?= 4(x^2+y^2+z^2) + 16 x y z - 1
 
-.PHONY: demo test bench gallery clean
+.PHONY: demo test bench fuzz gallery clean
 
 $(STAMP): pyproject.toml
 	python3 -m venv .venv
@@ -21,6 +21,10 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_smooth.py
 	$(PY) benchmarks/bench_singular.py
+
+# A thousand random surfaces through an independent judge (issue #13): prints figures.
+fuzz: $(STAMP)
+	$(PY) benchmarks/fuzz.py --n 1000 --jobs 2
 
 gallery: $(STAMP)
 	$(PY) gallery/generate.py --out gallery/out --jobs 2

@@ -384,6 +384,12 @@ CURVE_SVD_FLOOR = 1e-11
 #: the distance it may move (the points are then at rounding level).
 CURVE_STOP = 1e-13
 
+#: Rounds of Newton onto a curve and a slide onto the box's face that
+#: place a curve's end on the box (each shrinks the slide by about the
+#: curvature times the step; they stop once the slide is below CURVE_STOP
+#: of the step).
+CURVE_CLIP_ROUNDS = 30
+
 #: Other changes of type (read from the arcs on a circle, which blur
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3

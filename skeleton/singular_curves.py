@@ -371,12 +371,29 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     # Newton held in the face's plane stalls on a tangent-sheet curve that
     # meets the face obliquely: Newton across the curve, then along it
     # onto the face (the curve is straight to rounding over that slide).
+    # The slide along the chord's direction t, not the curve's tangent,
+    # leaves the point off the curve by the slide times their angle (about
+    # the curvature times h): each round shrinks the slide by that factor
+    # only, so the rounds go on until the slide is at rounding level (three
+    # left curve ends 1e-7 to 3e-5 of the box off the surface), as long as
+    # each slide is shorter than the one before (a chord nearly along the
+    # face, the curve bulging out of the box between its ends: the rounds
+    # do not contract and wander off along the face).
     t = _unit(d)
     z = q
-    for _ in range(3):
-        z = _correct(surface, z[None], t[None], h)[0][0]
-        if abs(t[axis]) > 1e-3:
-            z = z + t * (value - z[axis]) / t[axis]
+    previous = np.inf
+    for k in range(tol.CURVE_CLIP_ROUNDS):
+        corrected = _correct(surface, z[None], t[None], h)[0][0]
+        if abs(t[axis]) <= 1e-3:
+            z = corrected
+            break
+        slide = t * (value - corrected[axis]) / t[axis]
+        length = float(np.linalg.norm(slide))
+        if k >= 3 and not length < previous:
+            break
+        z, previous = corrected + slide, length
+        if not length > tol.CURVE_STOP * h:
+            break
     z[axis] = value
     return np.clip(z, box[:, 0], box[:, 1])
 
