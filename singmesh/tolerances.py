@@ -375,10 +375,11 @@ TUBE_HOLE_CELLS = 3
 #: Changes of type along a curve are placed to this fraction of a cell.
 CURVE_PLACE = 1e-12
 
-#: Singular values of the Jacobian of (F, grad F) below this times F's
-#: largest coefficient count as zero on a curve of singular points: the
-#: one along the curve is rounding there.
-CURVE_SVD_FLOOR = 1e-11
+#: Singular values of the Jacobian of (F, grad F) below this times its
+#: largest count as zero in Newton onto a curve of singular points (no
+#: absolute floor: across a curve of type beyond A_k they are genuinely
+#: small; the one along the curve is left out by the step's plane).
+CURVE_SVD_RTOL = 1e-12
 
 #: Newton onto a curve stops when no step is longer than this fraction of
 #: the distance it may move (the points are then at rounding level).

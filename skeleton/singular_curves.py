@@ -192,7 +192,6 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     x = np.array(q, dtype=float)
     k = len(x)
     hk = np.broadcast_to(np.asarray(h, dtype=float), (k,))
-    floor = tol.CURVE_SVD_FLOOR * float(surface.scale)
     previous = np.full(k, np.inf)
     stalled = np.zeros(k, np.int64)
     if across is not None:
@@ -216,7 +215,7 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
             r = np.concatenate([f[:, None], g], axis=1)
             j = np.concatenate([g[:, None, :], hh], axis=1)
             if across is None:
-                step = _least_squares(j, r, floor, drop_smallest=True)
+                step = _least_squares(j, r, drop_smallest=True)
             else:
                 # Least squares in the plane normal to ``across`` itself,
                 # not a 3-d step projected onto it: the 3-d step divides
@@ -225,7 +224,7 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 # off the tangent, the projection keeps part of that
                 # (Newton then stalls at ~1e-7 on 15-digit input).
                 pl = plane[live]
-                step = np.einsum("kia,ka->ki", pl, _least_squares(j @ pl, r, floor))
+                step = np.einsum("kia,ka->ki", pl, _least_squares(j @ pl, r))
             length = np.linalg.norm(step, axis=1, keepdims=True)
             moving = length[:, 0] > tol.CURVE_STOP * hk[live]
             if each:
@@ -310,14 +309,18 @@ def _rows_eval(fn, x: np.ndarray, alone: bool):
     return fn(x)
 
 
-def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bool = False) -> np.ndarray:
-    """Minimum-norm least-squares steps j^+ r, singular values below ``floor`` dropped.
+def _least_squares(j: np.ndarray, r: np.ndarray, drop_smallest: bool = False) -> np.ndarray:
+    """Minimum-norm least-squares steps j^+ r, singular values below ``CURVE_SVD_RTOL`` of the largest dropped.
 
     Near a curve of singular points the Jacobian of (F, grad F) has a
     singular value of rounding size along the curve (exactly zero for
     exact input); inverting it would throw the point far along the curve.
     With ``drop_smallest`` the smallest is always dropped: the step goes
-    across the curve, whose tangent that singular vector estimates.
+    across the curve, whose tangent that singular vector estimates.  In
+    the plane normal to the curve (or with the smallest dropped) no
+    absolute floor: small singular values there are a transversal type
+    beyond A_k (y^6 + z^3, whose second derivatives vanish to fourth order
+    on the curve), and a floor of 1e-11 stopped Newton 7e-4 off the curve.
     """
     # Where F or a derivative is undefined or infinite (the end of sqrt's
     # or asin's domain) no step: the point is not accepted.
@@ -326,7 +329,7 @@ def _least_squares(j: np.ndarray, r: np.ndarray, floor: float, drop_smallest: bo
         j = np.where(bad[:, None, None], 0.0, j)
         r = np.where(bad[:, None], 0.0, r)
     u, sv, vt = np.linalg.svd(j, full_matrices=False)
-    cut = np.maximum(1e-12 * sv[:, :1], floor)
+    cut = tol.CURVE_SVD_RTOL * sv[:, :1]
     keep = sv > cut
     if drop_smallest:
         keep[:, -1] = False

@@ -487,3 +487,25 @@ def test_plane_through_lattice_lines_crossing_a_surface(text):
     # made r- and r+ events at random lattice points there, and the rails
     # of the tube round the double curve broke (6 to 73 open edges).
     check_curve_mesh(text, BOX1, 1, half_sheets=4)
+
+
+@pytest.mark.parametrize("text, axis", [
+    ("-1.3163809875646 y^6 - 0.224145358282518 z^3", 0),   # J10 across the x-axis
+    ("4/7 y^5 - 1/2 x^3 y^2 - 9/2 x^4 z", 2),              # along the z-axis
+])
+def test_curve_vertices_of_a_type_beyond_a_k_lie_on_the_curve(text, axis):
+    # Across these curves F's second derivatives vanish (to fourth order for
+    # y^6 + z^3), so the Jacobian of (F, grad F) has singular values far
+    # below 1e-11 near the curve: an absolute floor on them stopped Newton
+    # with the curve's vertices up to 7e-4 off the axis (fuzz s1-41, s1-220).
+    m = mesh_quiet(text, BOX1)
+    curve = np.concatenate([c.vertices for c in m.singular_curves])
+    P = m.vertices[curve]
+    # The singular line is the coordinate axis (sympy: F and grad F vanish there).
+    others = [v for i, v in enumerate((X, Y, Z)) if i != axis]
+    e = Surface.parse(text).expr
+    assert all(sympy.expand(q.subs({others[0]: 0, others[1]: 0})) == 0 for q in (e, e.diff(X), e.diff(Y), e.diff(Z)))
+    off = np.linalg.norm(np.delete(P, axis, axis=1), axis=1)
+    assert len(P) >= 100
+    assert np.median(off) <= 1e-8
+    assert np.mean(off <= 1e-6) >= 0.99, np.sort(off)[-5:]
