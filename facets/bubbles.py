@@ -27,16 +27,14 @@ from scipy.sparse.csgraph import connected_components
 from singmesh import tolerances as tol
 
 
-def lattice_specks(vertices: np.ndarray, faces: np.ndarray, box: np.ndarray, cell: float,
-                   fixed: np.ndarray, gradient, hessian) -> np.ndarray:
+def lattice_specks(vertices: np.ndarray, faces: np.ndarray, cell: float, fixed: np.ndarray,
+                   gradient, hessian) -> np.ndarray:
     """Which triangles belong to lattice specks (see the module docstring).
 
     Parameters
     ----------
     vertices : (V, 3) ndarray
     faces : (T, 3) int64
-    box : (3, 2) ndarray
-        The domain: a piece with an open edge on it is not closed, and stays.
     cell : float
         The fine lattice's cell (largest side).
     fixed : (V,) bool
@@ -48,45 +46,44 @@ def lattice_specks(vertices: np.ndarray, faces: np.ndarray, box: np.ndarray, cel
     -------
     (T,) bool
     """
-    drop = np.zeros(len(faces), bool)
     n = len(vertices)
     if len(faces) == 0:
-        return drop
+        return np.zeros(0, bool)
     a = faces.ravel()
     b = np.roll(faces, -1, axis=1).ravel()
-    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
-    k, label = connected_components(graph, directed=False)
+    k, label = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
     face_label = label[faces[:, 0]]
     sizes = np.bincount(face_label, minlength=k)
+    # A piece with an open edge (on the box: one inside is not made) is
+    # not closed; a piece holding a singular vertex is the singularity's.
+    edges, count = np.unique(np.sort(np.stack([a, b], axis=1), axis=1), axis=0, return_counts=True)
+    spoiled = np.zeros(k, bool)
+    np.logical_or.at(spoiled, label[edges[count == 1, 0]], True)
+    np.logical_or.at(spoiled, label[fixed], True)
     # Never the whole mesh: the largest piece stays whatever it is.
-    candidates = [c for c in np.nonzero((sizes > 0) & (sizes <= tol.BUBBLE_FACES))[0].tolist()
-                  if c != int(np.argmax(sizes))]
-    if not candidates:
-        return drop
-    edges = np.sort(np.stack([a, b], axis=1), axis=1)
-    uniq, count = np.unique(edges, axis=0, return_counts=True)
-    open_vertex = np.zeros(n, bool)
-    open_vertex[uniq[count == 1].ravel()] = True
-    starts, pieces = [], []
-    for c in candidates:
-        tri = np.nonzero(face_label == c)[0]
-        vs = np.unique(faces[tri])
-        # Closed inside the box, no singular vertex, thin across.
-        if open_vertex[vs].any() or fixed[vs].any():
-            continue
-        p = vertices[vs]
-        centre = p.mean(axis=0)
-        thinnest = np.linalg.svd(p - centre, compute_uv=False)[-1] if len(p) >= 3 else 0.0
-        across = 2.0 * thinnest * np.sqrt(3.0 / len(p))   # rms spread -> extent, roughly
-        if across > tol.BUBBLE_THICKNESS * cell:
-            continue
-        starts.append(centre)
-        pieces.append((tri, p.min(axis=0) - cell, p.max(axis=0) + cell))
-    if not pieces:
-        return drop
-    x = np.array(starts)
-    g = gradient(x)
-    scale = np.linalg.norm(g, axis=1) + np.abs(hessian(x)).max(axis=(1, 2)) * cell
+    spoiled[np.argmax(sizes)] = True
+    candidate = (sizes > 0) & (sizes <= tol.BUBBLE_FACES) & ~spoiled
+    if not candidate.any():
+        return np.zeros(len(faces), bool)
+    # Thickness of every piece at once: the smallest eigenvalue of its
+    # vertices' covariance (2 sqrt(3 lambda): the extent of points spread
+    # evenly across it).
+    used = np.unique(faces)
+    lab = label[used]
+    m = np.bincount(lab, minlength=k).astype(float)
+    centre = np.stack([np.bincount(lab, vertices[used, i], minlength=k) for i in range(3)], axis=1)
+    centre /= np.maximum(m, 1.0)[:, None]
+    d = vertices[used] - centre[lab]
+    cov = np.zeros((k, 3, 3))
+    np.add.at(cov, lab, d[:, :, None] * d[:, None, :])
+    cov /= np.maximum(m, 1.0)[:, None, None]
+    across = 2.0 * np.sqrt(3.0 * np.maximum(np.linalg.eigvalsh(cov[candidate])[:, 0], 0.0))
+    pieces = np.nonzero(candidate)[0][across <= tol.BUBBLE_THICKNESS * cell]
+    if not len(pieces):
+        return np.zeros(len(faces), bool)
+    # Newton on grad F = 0 from each piece's centre, all pieces at once.
+    x = centre[pieces].copy()
+    scale = np.linalg.norm(gradient(x), axis=1) + np.abs(hessian(x)).max(axis=(1, 2)) * cell
     for _ in range(tol.BUBBLE_NEWTON):
         h = hessian(x)
         g = gradient(x)
@@ -100,11 +97,15 @@ def lattice_specks(vertices: np.ndarray, faces: np.ndarray, box: np.ndarray, cel
     # closest F has a saddle between them (least across, greatest along).
     lam = np.linalg.eigvalsh(hessian(x))
     critical &= (lam[:, 0] > 0) | (lam[:, -1] < 0)
-    for (tri, lo, hi), xc, crit in zip(pieces, x, critical):
-        inside = bool(np.all((xc >= lo) & (xc <= hi)))
-        if not (crit and inside):
-            drop[tri] = True
-    return drop
+    # ... inside the piece's bounding box, widened by a cell.
+    lo = np.full((k, 3), np.inf)
+    hi = np.full((k, 3), -np.inf)
+    np.minimum.at(lo, lab, vertices[used])
+    np.maximum.at(hi, lab, vertices[used])
+    inside = np.all((x >= lo[pieces] - cell) & (x <= hi[pieces] + cell), axis=1)
+    speck = np.zeros(k, bool)
+    speck[pieces[~(critical & inside)]] = True
+    return speck[face_label]
 
 
 def without_faces(vertices: np.ndarray, faces: np.ndarray, drop: np.ndarray, *per_vertex: np.ndarray):

@@ -308,7 +308,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)
     # Closed specks round single lattice points between two sheets closer
     # than a cell (no critical point of F in them) are not the surface.
-    specks = lattice_specks(vertices, faces, b, float(cell.max()),
+    specks = lattice_specks(vertices, faces, float(cell.max()),
                             np.isin(vkeys, fixed) | np.isin(vkeys, point_key(np.arange(len(points)))),
                             surf.gradient, surf.hessian)
     if specks.any():
