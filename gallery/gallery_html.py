@@ -1,9 +1,15 @@
 """Static HTML for the singmesh gallery: ``index.html``, one page per entry, ``style.css``.
 
 Everything is local (no fonts, scripts or styles from the network), so the
-output directory can be opened from disk or copied anywhere.  The only
-script is a few lines of inline JavaScript for the filter buttons; without
-it every entry is simply shown.
+output directory can be opened from disk or copied anywhere.  The index has
+a few lines of inline JavaScript for the filter buttons (without it every
+entry is simply shown).  Each entry's page has the interactive 3-D view of
+:mod:`singmesh.view`: its mesh data embedded in the page, three.js and the
+viewer loaded by classic ``<script src>`` from the folder itself (copied
+there by :func:`write_site`).
+
+Marks and badges are small inline SVG icons, not characters: the symbols
+they replace (U+29B8 in particular) are missing from common fonts.
 """
 
 from __future__ import annotations
@@ -13,20 +19,52 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from gallery_lib import Group, type_summary
+from singmesh.view import VIEW_CSS, copy_scripts, view_fragment
 
-#: Badge text and CSS class per verdict.  Shape and text carry the meaning
-#: as well as colour, so the marks survive grey-scale printing.
 DASH = "\u2014"
 DOT = " \u00b7 "
 
-VERDICTS = {
-    "match": ("\u2713 match", "ok"),
-    "mismatch": ("\u2717 mismatch", "bad"),
-    "unsupported": ("\u29b8 unsupported", "warn"),
-    "meshed": ("\u25cb meshed, nothing to compare", "na"),
-    "unread": ("\u2298 does not read", "warn"),
-    "error": ("\u26a0 error", "err"),
+#: Icons as inline SVG paths (16 x 16, drawn in the text colour): a font
+#: may lack a symbol (U+29B8, the circled slash, is in none of DejaVu,
+#: Liberation, Arial or Segoe UI), an SVG is drawn the same everywhere.
+_ICON_PATHS = {
+    "check": '<path d="M3 8.6l3.2 3.2L13 4.6" fill="none" stroke-width="2.2"/>',
+    "cross": '<path d="M4.2 4.2l7.6 7.6M11.8 4.2l-7.6 7.6" fill="none" stroke-width="2.2"/>',
+    "circle-slash": '<circle cx="8" cy="8" r="5.9" fill="none" stroke-width="1.8"/>'
+                    '<path d="M3.9 3.9l8.2 8.2" fill="none" stroke-width="1.8"/>',
+    "circle": '<circle cx="8" cy="8" r="5.2" fill="none" stroke-width="1.8"/>',
+    "circle-backslash": '<circle cx="8" cy="8" r="5.9" fill="none" stroke-width="1.8"/>'
+                        '<path d="M12.1 3.9l-8.2 8.2" fill="none" stroke-width="1.8"/>',
+    "warning": '<path d="M8 1.9L15 14.1H1z" fill="none" stroke-width="1.7"/>'
+               '<path d="M8 6.2v3.9" fill="none" stroke-width="1.9"/>'
+               '<circle cx="8" cy="12.1" r="1.05" fill="currentColor" stroke="none"/>',
 }
+
+
+def icon(name: str, title: str | None = None) -> str:
+    """An inline SVG icon (``_ICON_PATHS``) in the text's colour; with ``title``, an image named so."""
+    a11y = f' role="img"><title>{esc(title)}</title>' if title else ' aria-hidden="true">'
+    return (f'<svg class="icon" viewBox="0 0 16 16" width="16" height="16" stroke="currentColor" '
+            f'stroke-linecap="round" stroke-linejoin="round"{a11y}{_ICON_PATHS[name]}</svg>')
+
+
+#: Badge text, CSS class and icon per verdict.  Shape and text carry the
+#: meaning as well as colour, so the marks survive grey-scale printing.
+VERDICTS = {
+    "match": ("match", "ok", "check"),
+    "mismatch": ("mismatch", "bad", "cross"),
+    "unsupported": ("unsupported", "warn", "circle-slash"),
+    "meshed": ("meshed, nothing to compare", "na", "circle"),
+    "unread": ("does not read", "warn", "circle-backslash"),
+    "error": ("error", "err", "warning"),
+}
+
+
+def verdict_label(verdict: str) -> str:
+    """The verdict's icon and words, as HTML."""
+    text, _, name = VERDICTS[verdict]
+    return f"{icon(name)} {esc(text)}"
+
 
 CSS = """\
 :root {
@@ -72,6 +110,7 @@ section.group > p.gdesc { margin: 0 0 12px; color: var(--muted); max-width: 920p
 .title { display: flex; justify-content: space-between; align-items: baseline; gap: 8px; }
 .title h3 { margin: 0; font-size: 17px; font-weight: 650; }
 .badge { border-radius: 999px; padding: 1px 9px; font-size: 12.5px; font-weight: 600; white-space: nowrap; }
+svg.icon { width: 1em; height: 1em; vertical-align: -0.14em; overflow: visible; }
 .badge.ok { color: var(--ok); background: var(--ok-bg); }
 .badge.bad { color: var(--bad); background: var(--bad-bg); }
 .badge.warn { color: var(--warn); background: var(--warn-bg); }
@@ -106,7 +145,10 @@ th { color: var(--muted); font-weight: 600; }
 pre { background: #16202b; color: #e6edf3; padding: 12px 14px; border-radius: 10px; overflow: auto; font-size: 12.5px; line-height: 1.4; }
 pre.eq { background: var(--code-bg); color: var(--ink); white-space: pre-wrap; overflow-wrap: anywhere; }
 footer { color: var(--muted); font-size: 13px; text-align: center; padding: 24px; }
-"""
+details.still { margin-top: 10px; font-size: 14px; }
+details.still summary { cursor: pointer; color: var(--accent); }
+details.still img.big { margin-top: 8px; }
+""" + VIEW_CSS
 
 FILTER_JS = """\
 document.querySelectorAll('.toolbar button').forEach(function (b) {
@@ -135,8 +177,8 @@ def _mark(ok: bool | None) -> str:
     if ok is None:
         return '<span class="mark na" title="not checked">\u2014</span>'
     if ok:
-        return '<span class="mark ok" title="as expected">\u2713</span>'
-    return '<span class="mark bad" title="differs from the catalogue">\u2717</span>'
+        return f'<span class="mark ok" title="as expected">{icon("check", "as expected")}</span>'
+    return f'<span class="mark bad" title="differs from the catalogue">{icon("cross", "differs")}</span>'
 
 
 def verdict_of(rec: dict) -> str:
@@ -151,11 +193,9 @@ def verdict_of(rec: dict) -> str:
 def badge(rec: dict) -> str:
     """The coloured verdict badge of an entry (plus "unsupported" for a failed unsupported one)."""
     v = verdict_of(rec)
-    text, cls = VERDICTS[v]
-    out = f'<span class="badge {cls}">{esc(text)}</span>'
+    out = f'<span class="badge {VERDICTS[v][1]}">{verdict_label(v)}</span>'
     if v == "error" and rec.get("status") == "unsupported":
-        t2, c2 = VERDICTS["unsupported"]
-        out += f' <span class="badge {c2}">{esc(t2)}</span>'
+        out += f' <span class="badge {VERDICTS["unsupported"][1]}">{verdict_label("unsupported")}</span>'
     return out
 
 
@@ -292,8 +332,8 @@ def index_page(records: Sequence[dict], groups: Sequence[Group], meta: dict) -> 
 {f'<ul class="unread">{unread}</ul>' if unread else ''}
 </section>""")
     buttons = "".join(
-        f'<button type="button" data-show="{k}"{" class=on" if k == "all" else ""}>{esc(label)}</button>'
-        for k, label in [("all", f"all {len(records)}")] + [(k, f"{VERDICTS[k][0]} {c[k]}") for k in VERDICTS
+        f'<button type="button" data-show="{k}"{" class=on" if k == "all" else ""}>{label}</button>'
+        for k, label in [("all", f"all {len(records)}")] + [(k, f"{verdict_label(k)} {c[k]}") for k in VERDICTS
                                                             if c[k] or k in ("match", "error")])
     body = f"""<header class="top">
 <h1>singmesh gallery</h1>
@@ -303,13 +343,14 @@ singular points found against what is known, Euler characteristic, and the meshe
 ({esc(meta.get("jobs"))} process{"es" if meta.get("jobs", 1) != 1 else ""}) \u00b7 <a href="report.json">report.json</a></p>
 <div class="stats">
 <span>{len(records)} surfaces</span>
-{"".join(f'<span>{esc(VERDICTS[k][0])} {c[k]}</span>' for k in VERDICTS if c[k] or k in ("match", "error"))}
+{"".join(f'<span>{verdict_label(k)} {c[k]}</span>' for k in VERDICTS if c[k] or k in ("match", "error"))}
 </div>
 </header>
 <main>
 <div class="toolbar">{buttons}
 <span class="legend">orange: the side grad F points to, blue: the other side \u00b7 dots: singular points found
-(red A, purple D, green E, black other) \u00b7 \u2713 as expected, \u2717 differs, \u2014 not known</span></div>
+(red A, purple D, green E, black other) \u00b7 <span class="mark ok">{icon("check")}</span> as expected,
+<span class="mark bad">{icon("cross")}</span> differs, \u2014 not known \u00b7 each entry's page turns the surface in 3-D</span></div>
 {chr(10).join(sections)}
 </main>
 <footer>Generated by gallery/generate.py from {esc(Path(meta.get("catalogue") or "gallery/catalogue.toml").name)}.</footer>
@@ -325,8 +366,18 @@ def _fmt_point(p) -> str:
         return esc(p)
 
 
-def detail_page(rec: dict, prev: dict | None, nxt: dict | None, group: Group | None) -> str:
-    """The page of one entry: large picture, comparison, singular points, full report."""
+#: Height of the interactive view on an entry's page, in CSS pixels.
+VIEW_HEIGHT = 560
+
+
+def detail_page(rec: dict, prev: dict | None, nxt: dict | None, group: Group | None,
+                view: str | None = None) -> str:
+    """The page of one entry: interactive view (or picture), comparison, singular points, full report.
+
+    ``view``: the entry's :func:`singmesh.view.view_json` text, drawn by
+    the scripts :func:`write_site` copies beside the page; without it the
+    page shows the PNG picture alone.
+    """
     slug = esc(rec["slug"])
     files = rec.get("files") or {}
     nav_prev = f'<a href="{esc(prev["slug"])}.html">\u2190 {esc(prev["name"])}</a>' if prev else "<span></span>"
@@ -334,6 +385,10 @@ def detail_page(rec: dict, prev: dict | None, nxt: dict | None, group: Group | N
     picture = (f'<img class="big" src="{esc(files["png"])}" alt="{esc(rec["name"])}">' if "png" in files
                else f'<div class="panel"><p class="note err">No picture: the entry failed at the '
                     f'{esc(rec.get("stage"))} stage.</p></div>')
+    if view is not None:
+        still = (f'<details class="still"><summary>static picture</summary>{picture}</details>'
+                 if "png" in files else "")
+        picture = view_fragment(view, inline_script=False, script_src="", height=VIEW_HEIGHT) + still
     comp = rec.get("comparison") or {}
     count, types = singular_summary(rec)
     box = " \u00d7 ".join(f"[{lo:g}, {hi:g}]" for lo, hi in rec["box"])
@@ -409,7 +464,7 @@ def detail_page(rec: dict, prev: dict | None, nxt: dict | None, group: Group | N
 
 
 def write_site(out_dir: str | Path, records: Sequence[dict], groups: Sequence[Group], meta: dict) -> Path:
-    """Write ``style.css``, ``index.html`` and ``<slug>.html`` for every record.
+    """Write ``style.css``, ``index.html``, ``<slug>.html`` for every record, and the view's scripts.
 
     Returns
     -------
@@ -419,11 +474,14 @@ def write_site(out_dir: str | Path, records: Sequence[dict], groups: Sequence[Gr
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "style.css").write_text(CSS, encoding="utf-8")
+    copy_scripts(out)  # three.js, its licence and the viewer, loaded by the entries' pages
     by_id = {g.id: g for g in groups}
     for i, rec in enumerate(records):
         prev = records[i - 1] if i > 0 else None
         nxt = records[i + 1] if i + 1 < len(records) else None
-        (out / f"{rec['slug']}.html").write_text(detail_page(rec, prev, nxt, by_id.get(rec["group"])),
+        data = out / (rec.get("files") or {}).get("view", "-")
+        view = data.read_text(encoding="utf-8") if data.is_file() else None
+        (out / f"{rec['slug']}.html").write_text(detail_page(rec, prev, nxt, by_id.get(rec["group"]), view),
                                                 encoding="utf-8")
     index = out / "index.html"
     index.write_text(index_page(records, groups, meta), encoding="utf-8")

@@ -402,7 +402,7 @@ def _singularity(record) -> dict[str, Any]:
 def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
               coarse: int | None = None, fine: int | None = None,
               timeout: float | None = None) -> dict[str, Any]:
-    """Mesh one entry, write its PLY, OBJ and PNG, and collect its report.
+    """Mesh one entry, write its PLY, OBJ, PNG and view data, and collect its report.
 
     Never raises for a problem with the entry: any exception is recorded
     (``error``, ``traceback``, and the stage it happened in) so that one
@@ -412,7 +412,8 @@ def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
     ----------
     entry : Entry
     out_dir : str or Path
-        Where ``<slug>.ply``, ``<slug>.obj`` and ``<slug>.png`` go.
+        Where ``<slug>.ply``, ``<slug>.obj``, ``<slug>.png`` and ``<slug>.view.json``
+        (the interactive view's data, :func:`singmesh.view.view_json`) go.
     size : int
         Picture side in pixels.
     coarse, fine : int, optional
@@ -494,6 +495,7 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
     """The work of :func:`run_entry`; fills ``record`` as it goes, ``stage`` says how far."""
     import singmesh
     from gallery_render import render_png
+    from singmesh.view import view_json
 
     # A definition of a .defs file that does not read is the file's, not a failure.
     record["stage"] = "read" if entry.defs else "mesh"
@@ -514,6 +516,9 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
     for suffix in ("ply", "obj"):
         m.write(out / f"{entry.slug}.{suffix}")
         record["files"][suffix] = f"{entry.slug}.{suffix}"
+    # The interactive view's data (singmesh.view), embedded in the entry's page by gallery_html.
+    (out / f"{entry.slug}.view.json").write_text(view_json(m), encoding="utf-8")
+    record["files"]["view"] = f"{entry.slug}.view.json"
     record["stage"] = "render"
     t1 = time.perf_counter()
     note = None

@@ -486,6 +486,30 @@ class Mesh:
         data.update({k: np.concatenate([v, np.full(extra, np.nan)]) for k, v in self.curvature_data().items()})
         return meshio.Mesh(points, cells, point_data=data)
 
+    def to_trimesh(self):
+        """The triangles as a ``trimesh.Trimesh`` (:func:`singmesh.convert.to_trimesh`; needs ``singmesh[trimesh]``)."""
+        from .convert import to_trimesh
+
+        return to_trimesh(self)
+
+    def to_pyvista(self, curvature: bool = True):
+        """The mesh as a ``pyvista.PolyData`` with line cells (:func:`singmesh.convert.to_pyvista`; needs ``singmesh[pyvista]``)."""
+        from .convert import to_pyvista
+
+        return to_pyvista(self, curvature=curvature)
+
+    def to_html(self, *, inline_script: bool = True, script_src: str | None = None, height: int = 480) -> str:
+        """A web page with the interactive 3-D view of the mesh (:func:`singmesh.view.mesh_html`), offline."""
+        from .view import mesh_html
+
+        return mesh_html(self, inline_script=inline_script, script_src=script_src, height=height)
+
+    def _repr_html_(self) -> str:
+        """The interactive 3-D view in a notebook (three.js inlined: no network needed)."""
+        from .view import notebook_html
+
+        return notebook_html(self)
+
     def write(self, path, file_format: str | None = None, curvature: bool = True) -> Path:
         """Write through meshio; the format comes from the suffix.
 

@@ -34,7 +34,7 @@ UNSUPPORTED = f'''
 
 [[entry]]
 name = "{UNSUPPORTED_NAME}"
-group = "unsupported"
+group = "curves"
 equation = "x^2 - y^2"
 box = [[-1.0, 1.0], [-1.0, 1.0], [-1.0, 1.0]]
 description = "Marked unsupported for the test: the page must label it so, with the reason."
