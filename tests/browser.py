@@ -117,19 +117,20 @@ class Browser:
     def wait_event(self, method: str, timeout: float | None = None) -> dict:
         """Wait for an event named ``method`` (kept ones first)."""
         for e in self.events:
-            if e["method"] == method:
+            if e["method"] == method and e.get("sessionId") == self.session:
                 return e
         deadline = time.monotonic() + (timeout or self.timeout)
         while True:
             reply = self._read_message(deadline)
             if "method" in reply:
                 self.events.append(reply)
-                if reply["method"] == method:
+                if reply["method"] == method and reply.get("sessionId") == self.session:
                     return reply
 
     # ------------------------------------------------------------ page
     def open(self, url: str) -> None:
-        """Open a page in a new tab and wait for its load event."""
+        """Open a page in a new tab and wait for its load event (the events of earlier pages are dropped)."""
+        self.events = []
         target = self.send("Target.createTarget", {"url": "about:blank"}, session=False)["targetId"]
         self.session = self.send("Target.attachToTarget", {"targetId": target, "flatten": True},
                                  session=False)["sessionId"]
@@ -169,6 +170,8 @@ class Browser:
         """Console errors, uncaught exceptions and failed loads of the page so far, one line each."""
         out = []
         for e in self.events:
+            if e.get("sessionId") != self.session:
+                continue
             p = e.get("params", {})
             if e["method"] == "Runtime.exceptionThrown":
                 d = p.get("exceptionDetails", {})
@@ -184,8 +187,8 @@ class Browser:
     def warnings(self) -> list[str]:
         """Console warnings of the page so far."""
         return [" ".join(str(a.get("value", a.get("description"))) for a in e["params"].get("args", []))
-                for e in self.events
-                if e["method"] == "Runtime.consoleAPICalled" and e["params"].get("type") == "warning"]
+                for e in self.events if e.get("sessionId") == self.session
+                and e["method"] == "Runtime.consoleAPICalled" and e["params"].get("type") == "warning"]
 
     def close(self) -> None:
         try:

@@ -87,15 +87,15 @@ def _stable_report(path: Path) -> list:
 
 
 def test_gallery_files_do_not_depend_on_jobs(tmp_path):
-    # The gallery's mesh files (.ply, .obj, the curves' .vtk) and pictures
-    # are the same with one process or two; its pages and report.json hold
+    # The gallery's mesh files (.ply, .obj, the curves' .vtk), pictures, the
+    # interactive view's data (.view.json) and scripts are the same with one process or two; its pages and report.json hold
     # the build time and timings, which are compared without them.
     one, two = tmp_path / "one", tmp_path / "two"
     _gallery(one, 1, "1")
     _gallery(two, 2, "12345")
     names = sorted(p.name for p in one.iterdir())
     assert names == sorted(p.name for p in two.iterdir())
-    meshes = [n for n in names if n.endswith((".ply", ".obj", ".vtk", ".png"))]
+    meshes = [n for n in names if n.endswith((".ply", ".obj", ".vtk", ".png", ".view.json", ".js"))]
     assert len([n for n in meshes if n.endswith(".ply")]) == 3  # Cayley, the umbrella, the gyroid
     for name in meshes:
         assert (one / name).read_bytes() == (two / name).read_bytes(), name

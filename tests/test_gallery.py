@@ -412,6 +412,66 @@ def test_page_renders_in_headless_chromium(built, tmp_path):
     assert orange.mean() > 0.005, "no surface thumbnails visible in the screenshot"
 
 
+#: The characters outside ASCII the pages may use: each is in both DejaVu Sans and
+#: Liberation Sans (fc-list ':charset=HEX'), the fonts a Linux browser falls back on.
+#: The verdict marks are SVG icons, not characters (U+29B8 is in neither font).
+PAGE_CHARACTERS = set("\u00b7\u00d7\u03c7\u2014\u2190\u2192")
+
+
+def test_pages_use_only_characters_common_fonts_have(built):
+    out, report, _ = built
+    pages = [out / "index.html", out / "style.css"] + [out / f"{r['slug']}.html" for r in report["entries"]]
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        odd = {c for c in text if ord(c) > 127} - PAGE_CHARACTERS
+        assert not odd, f"{page.name}: {sorted(odd)}"
+    index = (out / "index.html").read_text(encoding="utf-8")
+    for verdict in ("match", "error", "unsupported"):
+        card = next(_card(index, r["slug"]) for r in report["entries"] if r["comparison"]["verdict"] == verdict)
+        badge = card[card.index('<span class="badge'):]
+        assert badge.index("<svg") < badge.index("</span>"), f"the {verdict} badge has no icon"
+
+
+def test_entry_pages_embed_the_interactive_view(built):
+    out, report, _ = built
+    for name in ("three.min.js", "three.LICENSE", "singmesh-view.js"):
+        assert (out / name).is_file(), name
+    for r in report["entries"]:
+        page = (out / f"{r['slug']}.html").read_text(encoding="utf-8")
+        if not r["ok"]:
+            assert "singmesh-view" not in page   # nothing to show: the failure is
+            continue
+        block = page[page.index('<script type="application/json"'):]
+        data = json.loads(block[block.index(">") + 1:block.index("</script>")])
+        assert data["triangles"] == r["report"]["faces"]
+        assert len(data["points"]) == len(r["singularities"])
+        assert '<script src="three.min.js"></script>' in page and '<script src="singmesh-view.js"></script>' in page
+    cc = next(r for r in report["entries"] if r["name"] == "Cross-cap")
+    page = (out / f"{cc['slug']}.html").read_text(encoding="utf-8")
+    assert '"curves":"' in page and '"isolated":"' in page   # its double line and its isolated line
+
+
+def test_entry_page_view_draws_in_chromium(built):
+    from browser import Browser, colour_facts, find_chromium, region
+
+    binary = find_chromium()
+    if binary is None:
+        pytest.skip("chromium is not installed (apt-get install chromium): the view is not opened")
+    out, report, _ = built
+    state = "(function () { var s = document.querySelector('.singmesh-view').getAttribute('data-state');" \
+            " return s && s !== 'starting' ? s : null; })()"
+    with Browser(binary, width=1100, height=800) as b:
+        b.open((out / "cone.html").as_uri())
+        assert b.wait_for(state, timeout=30) == "drawn", b.problems()
+        assert b.problems() == [] and b.warnings() == []
+        rect = b.evaluate("JSON.parse(JSON.stringify(document.querySelector('.singmesh-view').getBoundingClientRect()))")
+        facts = colour_facts(region(b.screenshot(), rect))
+        assert facts["distinct"] >= 100 and facts["orange"] > 0.002 and facts["blue"] > 0.002, facts
+        b.open((out / "index.html").as_uri())
+        assert b.evaluate("document.querySelectorAll('article').length") == len(report["entries"])
+        assert b.problems() == []
+
+
 DEFS = """\
 <group name="Quadrics">
 <group name="Round">
