@@ -154,8 +154,9 @@ def test_scripts_ship_with_the_package():
     from pathlib import Path
 
     project = tomllib.loads((Path(view.__file__).parents[1] / "pyproject.toml").read_text())
-    data = project["tool"]["setuptools"]["package-data"]["singmesh"]
-    assert "viewer/*.js" in data and "viewer/three.LICENSE" in data
+    assert "singmesh.viewer" in project["tool"]["setuptools"]["packages"]
+    data = project["tool"]["setuptools"]["package-data"]["singmesh.viewer"]
+    assert "*.js" in data and "three.LICENSE" in data
 
 
 # ---------------------------------------------------------------- optional libraries
