@@ -68,25 +68,49 @@ def _b64(array: np.ndarray, dtype: str) -> str:
     return base64.b64encode(np.ascontiguousarray(array, dtype=np.dtype(dtype).newbyteorder("<")).tobytes()).decode("ascii")
 
 
-def display_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Unit normals for shading: grad F, and where it vanishes the area-weighted normal of the triangles round the vertex.
+def display_geometry(vertices: np.ndarray, faces: np.ndarray,
+                     normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices, faces and unit normals to shade: grad F, with the corners where it vanishes split off.
 
-    At singular points and on singular curves grad F is zero; the
-    triangles' own normals (oriented like grad F, the faces being
-    counter-clockwise around it) keep the shading there from going black.
+    At singular points and on singular curves grad F is zero, and the
+    vertex is shared by sheets that meet at an angle: no one normal suits
+    all its triangles (an average across the sheets shades them in dark
+    streaks).  So each triangle corner at such a vertex gets a vertex of
+    its own (same position), whose normal is the mean of the triangle's
+    other corners' normals, or the triangle's own normal where it has no
+    corner with one (both oriented like grad F, the faces being
+    counter-clockwise around it).
+
+    Returns
+    -------
+    vertices : (n + k, 3)
+        The mesh's vertices, then the k split corners' copies.
+    faces : (m, 3)
+        The triangles, the split corners pointing at their copies.
+    normals : (n + k, 3)
+        Unit normals (zero only at a vertex no triangle has).
     """
+    vertices = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     out = np.array(normals, dtype=float).reshape(-1, 3)
     missing = np.linalg.norm(out, axis=1) == 0
-    if missing.any() and len(faces):
-        tri = vertices[faces]
-        area_normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        summed = np.zeros_like(out)
-        for k in range(3):
-            np.add.at(summed, faces[:, k], area_normal)
-        length = np.linalg.norm(summed, axis=1, keepdims=True)
-        fixed = missing & (length[:, 0] > 0)
-        out[fixed] = summed[fixed] / length[fixed]
-    return out
+    if not missing.any() or not len(faces):
+        return vertices, faces, out
+    corner_missing = missing[faces]                                   # (m, 3)
+    face_i, corner = np.nonzero(corner_missing)
+    # The triangle's other corners that have a normal, summed; else its own normal.
+    have = ~corner_missing[face_i]                                    # (k, 3)
+    mean = (out[faces[face_i]] * have[:, :, None]).sum(axis=1)
+    tri = vertices[faces[face_i]]
+    own = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    split = np.where(have.any(axis=1)[:, None], mean, own)
+    length = np.linalg.norm(split, axis=1, keepdims=True)
+    split = np.divide(split, length, out=np.zeros_like(split), where=length > 0)
+    faces = faces.copy()
+    copies = len(vertices) + np.arange(len(face_i))
+    source = faces[face_i, corner]
+    faces[face_i, corner] = copies
+    return np.vstack([vertices, vertices[source]]), faces, np.vstack([out, split])
 
 
 def _curve_segments(curves) -> tuple[np.ndarray, np.ndarray]:
@@ -115,15 +139,14 @@ def view_data(mesh) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``vertices`` (float32), ``normals`` (int8, unit normal times 127),
-        ``faces`` (uint16 or uint32, as ``index`` says), ``curves`` and
+        ``vertices`` (float32; the mesh's, then copies at the corners
+        :func:`display_geometry` splits off), ``normals`` (int8, unit normal
+        times 127), ``faces`` (uint16 or uint32, as ``index`` says), ``curves`` and
         ``isolated`` (float32 point pairs), ``points`` (position, type,
         colour per singular point), ``box``, the start camera and colours.
         Absent arrays (no triangle, no curve) are None.
     """
-    vertices = np.asarray(mesh.vertices, dtype=float).reshape(-1, 3)
-    faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
-    normals = display_normals(vertices, faces, np.asarray(mesh.normals, dtype=float))
+    vertices, faces, normals = display_geometry(mesh.vertices, mesh.faces, mesh.normals)
     index = "u16" if len(vertices) <= 0xFFFF else "u32"
     solid, isolated = _curve_segments(mesh.singular_curves or [])
     points = []
@@ -140,6 +163,7 @@ def view_data(mesh) -> dict[str, Any]:
         "faces": _b64(faces, "u2" if index == "u16" else "u4") if has_faces else None,
         "index": index,
         "triangles": int(len(faces)),
+        "mesh_vertices": int(len(mesh.vertices)),
         "curves": _b64(solid, "f4") if len(solid) else None,
         "isolated": _b64(isolated, "f4") if len(isolated) else None,
         "points": points,

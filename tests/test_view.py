@@ -65,16 +65,24 @@ def test_view_data_holds_the_mesh_and_its_nodes(cayley):
     assert data["index"] == "u16" and data["triangles"] == len(cayley.faces)
     f = _decode(data["faces"], "u2", 3)
     n = _decode(data["normals"], "i1", 3).astype(float) / 127.0
-    assert np.array_equal(v, cayley.vertices.astype(np.float32))
-    assert np.array_equal(f, cayley.faces)
+    # The mesh's vertices, then copies at the nodes' corners: the same triangles in space.
+    nv = len(cayley.vertices)
+    assert data["mesh_vertices"] == nv and len(v) > nv
+    assert np.array_equal(v[:nv], cayley.vertices.astype(np.float32))
+    assert np.array_equal(v[f], cayley.vertices[cayley.faces].astype(np.float32))
     # The normals are grad F (from the formula) to int8 precision; at the nodes grad F
-    # vanishes and the shading normal is still a unit vector.
-    x, y, z = cayley.vertices.T
+    # vanishes and every corner there has a unit normal on its triangle's side.
+    x, y, z = v.astype(float).T
     grad = np.stack([8 * x + 16 * y * z, 8 * y + 16 * x * z, 8 * z + 16 * x * y], axis=1)
     size = np.linalg.norm(grad, axis=1)
     ok = size > 1e-3
     assert np.abs(n[ok] - grad[ok] / size[ok, None]).max() < 0.01
-    assert np.abs(np.linalg.norm(n, axis=1) - 1).max() < 0.02
+    used = np.unique(f)
+    assert np.abs(np.linalg.norm(n[used], axis=1) - 1).max() < 0.02
+    tri = v[f].astype(float)
+    side = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    at_node = ~ok[f]
+    assert at_node.any() and ((n[f] * side[:, None, :]).sum(axis=2)[at_node] > 0).all()
     # The singular points: Cayley's four nodes, drawn red (A type).
     at = np.array([p["at"] for p in data["points"]])
     assert len(at) == 4
@@ -116,7 +124,7 @@ def test_view_data_takes_32_bit_indices_beyond_65535_vertices():
     rng = np.random.default_rng(3)
     vertices = rng.uniform(-1, 1, size=(70000, 3))
     faces = np.array([[0, 65535, 69999], [69998, 1, 65536]])
-    fake = SimpleNamespace(vertices=vertices, faces=faces, normals=np.zeros((70000, 3)),
+    fake = SimpleNamespace(vertices=vertices, faces=faces, normals=np.tile([0.0, 0.0, 1.0], (70000, 1)),
                            box=np.array([[-1, 1]] * 3, float), singular_curves=[], singularities=[])
     data = view.view_data(fake)
     assert data["index"] == "u32"
@@ -249,6 +257,45 @@ def test_page_draws_the_mesh_in_chromium(browser, cayley, tmp_path):
     rgb = img.reshape(-1, 3)
     red = (rgb[:, 0] > 0.6) & (rgb[:, 1] < 0.3) & (rgb[:, 2] < 0.3)
     assert red.sum() > 20   # the nodes' spheres
+
+
+def _shot(b: Browser) -> np.ndarray:
+    import time
+
+    time.sleep(0.4)   # the view redraws on the next animation frame
+    return region(b.screenshot(), b.evaluate(RECT.replace("EL", "document.querySelector('.singmesh-view')")))
+
+
+def _surface_share(img: np.ndarray) -> float:
+    facts = colour_facts(img)
+    return facts["orange"] + facts["blue"]
+
+
+def test_view_turns_and_zooms_with_the_mouse(browser, cayley, tmp_path):
+    page = tmp_path / "controls.html"
+    page.write_text(view.mesh_html(cayley), encoding="utf-8")
+    browser.open(page.as_uri())
+    assert _drawn(browser) == "drawn", browser.problems()
+    rect = browser.evaluate(RECT.replace("EL", "document.querySelector('.singmesh-view')"))
+    cx, cy = rect["x"] + rect["width"] / 2, rect["y"] + rect["height"] / 2
+    mouse = lambda kind, x, **kw: browser.send("Input.dispatchMouseEvent", {  # noqa: E731
+        "type": kind, "x": x, "y": cy, "button": "left", **kw})
+    start = _shot(browser)
+    for _ in range(2):
+        mouse("mouseWheel", cx, deltaX=0, deltaY=-300)
+    zoomed = _shot(browser)
+    assert _surface_share(zoomed) > 1.5 * _surface_share(start)   # closer: the surface fills more
+    mouse("mousePressed", cx, buttons=1, clickCount=1)
+    for dx in (30, 60, 90):
+        mouse("mouseMoved", cx + dx, buttons=1)
+    mouse("mouseReleased", cx + 90, buttons=0, clickCount=1)
+    turned = _shot(browser)
+    assert np.abs(turned - zoomed).max(axis=2).mean() > 0.05     # a drag turns it
+    mouse("mousePressed", cx, buttons=1, clickCount=2)
+    mouse("mouseReleased", cx, buttons=0, clickCount=2)
+    again = _shot(browser)
+    assert np.abs(again - start).max(axis=2).mean() < 0.01       # a double-click goes back to the start
+    assert browser.problems() == []
 
 
 def test_notebook_view_draws_in_chromium(browser, rotated_crosscap, tmp_path):
