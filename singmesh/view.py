@@ -11,8 +11,9 @@ gallery: :func:`copy_scripts`; ES modules are not loaded from ``file://``).
 
 Sizes: float32 positions (12 bytes per vertex), int8 unit normals (3),
 16- or 32-bit triangle indices (6 or 12 bytes per triangle), times 4/3 for
-base64: a mesh of 100k triangles and 50k vertices is about 2.8 MB, and the
-inlined scripts add about 0.7 MB.  Same mesh, same bytes.
+base64: a mesh of 100k triangles and 50k vertices is about 1.8 MB (measured:
+the tanglecube's 8898 triangles, 4441 vertices, 0.16 MB), and the inlined
+scripts add about 0.7 MB.  Same mesh, same bytes.
 """
 
 from __future__ import annotations
