@@ -135,7 +135,7 @@ def _mesh_command(argv: list[str]) -> int:
                    help='the equation, e.g. "4(x^2+y^2+z^2) + 16 x y z - 1", then parameter values '
                         "(with --defs: parameter values only)")
     p.add_argument("-o", "--output", help="mesh file; the format comes from the suffix "
-                   "(.ply .obj .stl .vtk .vtu .off)")
+                   "(.ply .obj .stl .vtk .vtu .off; .html: a page with the interactive 3-D view)")
     p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
                    help="the region meshed (default -2 2 -2 2 -2 2, or the definition's box)")
     p.add_argument("--coarse", type=int, default=32,
@@ -197,7 +197,7 @@ def _mesh_command(argv: list[str]) -> int:
             print(f"singmesh: error: cannot write {args.output}: {reason}", file=sys.stderr)
             return 2
         print(f"written              {path}")
-        if m.singular_curves and FORMATS.get(path.suffix.lower()) not in LINE_FORMATS:
+        if m.singular_curves and FORMATS.get(path.suffix.lower()) not in LINE_FORMATS + ("html",):
             print(f"curves written       {path.with_suffix('.curves.vtk')} (the format has no line cells)")
     return 0
 

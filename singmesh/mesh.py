@@ -19,6 +19,8 @@ from .surface import Surface
 FORMATS = {
     ".obj": "obj", ".ply": "ply", ".stl": "stl", ".vtk": "vtk", ".vtu": "vtu",
     ".off": "off", ".msh": "gmsh", ".xdmf": "xdmf", ".mesh": "medit",
+    # Not meshio's: a web page with the interactive view (singmesh.view), curves included.
+    ".html": "html",
 }
 
 
@@ -513,6 +515,9 @@ class Mesh:
     def write(self, path, file_format: str | None = None, curvature: bool = True) -> Path:
         """Write through meshio; the format comes from the suffix.
 
+        ``.html`` is not meshio's: it writes :meth:`to_html`, a page with
+        the interactive 3-D view (no network needed to open it).
+
         Formats with per-vertex arrays get the normals and, with
         ``curvature`` (the default), the curvatures as point data
         (``CURVATURE_FORMATS``: ``gaussian_curvature``, ``mean_curvature``,
@@ -529,6 +534,9 @@ class Mesh:
         if fmt is None:
             raise ValueError(
                 f"unknown mesh format {path.suffix!r}: use one of {', '.join(sorted(FORMATS))}")
+        if fmt == "html":  # the interactive view, one self-contained page (curves and points in it)
+            _write_atomic(path, lambda target: target.write_text(self.to_html(), encoding="utf-8"))
+            return path
         import meshio
 
         faces = self.faces.astype(np.int32) if fmt == "ply" else self.faces

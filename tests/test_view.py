@@ -167,6 +167,27 @@ def test_scripts_ship_with_the_package():
     assert "*.js" in data and "three.LICENSE" in data
 
 
+def test_cli_writes_the_view_page(tmp_path, capsys):
+    from singmesh.cli import main
+
+    out = tmp_path / "umbrella.html"
+    assert main(["mesh", "x^2 - y^2 z", "-o", str(out), "--box", "-1", "1", "-1", "1", "-1", "1",
+                 "--coarse", "8", "--fine", "32"]) == 0
+    printed = capsys.readouterr().out
+    assert f"written              {out}" in printed and "curves written" not in printed
+    page = out.read_text(encoding="utf-8")
+    data = json.loads(page[page.index('<script type="application/json"'):].split(">", 1)[1].split("</script>")[0])
+    # The umbrella's handle: the z axis, a double line for z > 0, an isolated line for z < 0.
+    for key, sign in (("curves", 1.0), ("isolated", -1.0)):
+        p = _decode(data[key], "f4", 3)
+        assert np.abs(p[:, :2]).max() < 1e-6 and (sign * p[:, 2] > -1e-6).all() and np.ptp(p[:, 2]) > 0.5
+    assert not list(tmp_path.glob("*.curves.vtk")) and "singmeshView" in page
+    again = tmp_path / "again.html"
+    assert main(["mesh", "x^2 - y^2 z", "-o", str(again), "--box", "-1", "1", "-1", "1", "-1", "1",
+                 "--coarse", "8", "--fine", "32"]) == 0
+    assert again.read_bytes() == out.read_bytes()
+
+
 # ---------------------------------------------------------------- optional libraries
 @pytest.mark.parametrize("module, method", [("trimesh", "to_trimesh"), ("pyvista", "to_pyvista")])
 def test_missing_library_names_the_extra(cayley, monkeypatch, module, method):
