@@ -66,7 +66,8 @@ def point_colour(name: str | None) -> str:
 
 def _b64(array: np.ndarray, dtype: str) -> str:
     """Base64 of the array's bytes as little-endian ``dtype`` (JavaScript's typed arrays read that)."""
-    return base64.b64encode(np.ascontiguousarray(array, dtype=np.dtype(dtype).newbyteorder("<")).tobytes()).decode("ascii")
+    data = np.ascontiguousarray(array, dtype=np.dtype(dtype).newbyteorder("<"))
+    return base64.b64encode(data.tobytes()).decode("ascii")
 
 
 def display_geometry(vertices: np.ndarray, faces: np.ndarray,
@@ -197,7 +198,10 @@ def script_text(name: str) -> str:
 
 
 def copy_scripts(folder: str | Path) -> list[Path]:
-    """Copy three.js (with its licence) and the viewer script into ``folder``, for pages loading them by ``<script src>``."""
+    """Copy three.js (with its licence) and the viewer script into ``folder``.
+
+    For pages that load them by ``<script src>`` from their own folder.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []

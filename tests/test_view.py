@@ -341,14 +341,13 @@ def test_scripts_beside_the_page_and_broken_ones_are_caught(browser, cayley, tmp
     browser.open((good / "page.html").as_uri())
     assert _drawn(browser) == "drawn", browser.problems()
     assert browser.problems() == [] and browser.warnings() == []   # three's deprecation notice is dropped
-    _check_canvas(region(browser.screenshot(), browser.evaluate(RECT.replace("EL", "document.querySelector('.singmesh-view')"))),
-                  "script_src")
+    _check_canvas(_shot(browser), "script_src")
     # A syntax error in the viewer: caught as an exception, nothing drawn.
     broken = tmp_path / "broken"
     view.copy_scripts(broken)
     js = broken / view.VIEW_FILE
-    js.write_text(js.read_text(encoding="utf-8").replace("function pieces(p, period) {", "function pieces(p, period) {{"),
-                  encoding="utf-8")
+    text = js.read_text(encoding="utf-8")
+    js.write_text(text.replace("function pieces(p, period) {", "function pieces(p, period) {{"), encoding="utf-8")
     (broken / "page.html").write_text(html_text, encoding="utf-8")
     browser.open((broken / "page.html").as_uri())
     assert _drawn(browser) is None
