@@ -25,8 +25,8 @@ DASH = "\u2014"
 DOT = " \u00b7 "
 
 #: Icons as inline SVG paths (16 x 16, drawn in the text colour): a font
-#: may lack a symbol (U+29B8, the circled slash, is in none of DejaVu,
-#: Liberation, Arial or Segoe UI), an SVG is drawn the same everywhere.
+#: may lack a symbol (U+29B8, the circled slash, is in neither DejaVu nor
+#: Liberation: fc-list ':charset=29b8'), an SVG is drawn the same everywhere.
 _ICON_PATHS = {
     "check": '<path d="M3 8.6l3.2 3.2L13 4.6" fill="none" stroke-width="2.2"/>',
     "cross": '<path d="M4.2 4.2l7.6 7.6M11.8 4.2l-7.6 7.6" fill="none" stroke-width="2.2"/>',
