@@ -262,6 +262,13 @@ def _gallery_command(argv: list[str]) -> int:
         print("singmesh: error: the gallery script is in the source tree (gallery/generate.py); "
               "run it from a checkout", file=sys.stderr)
         return 2
+    from .extras import require
+
+    # Before the script's imports, which would end in a traceback.
+    require("singmesh gallery", ["matplotlib", "tqdm"] + (["tomli"] if sys.version_info < (3, 11) else []),
+            extra="gallery")
+    if "--scheduler" in argv or any(a.startswith("--scheduler=") for a in argv):
+        require("--scheduler (Dask)", ["dask", "distributed"], extra="dask")
     sys.argv = [str(script)] + argv
     runpy.run_path(str(script), run_name="__main__")
     return 0
