@@ -21,10 +21,11 @@ from __future__ import annotations
 import json
 import math
 import sys
+import tempfile
 import time
 import warnings
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -48,7 +49,7 @@ class FrameJob:
     params: dict
     box: tuple
     settings: dict
-    out: str
+    out: str | None  # None: the worker sends the files back (a Dask worker on another machine)
     mesh_file: str
     picture: int  # side in pixels; 0: no picture
     curvature: bool = True  # the curvatures as point data in the mesh files
@@ -228,13 +229,19 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
                 "max_edge": max_edge, "chord": chord, "max_memory": max_memory}
     width = max(3, len(str(len(values) - 1)))
     box_list = tuple(tuple(float(v) for v in row) for row in b)
-    jobs_list = [FrameJob(i, v, surface, param, dict(params), box_list, settings, str(folder),
+    # Dask workers may be on other machines: they send their files back,
+    # and only this process writes into the folder.
+    where = None if scheduler is not None else str(folder)
+    jobs_list = [FrameJob(i, v, surface, param, dict(params), box_list, settings, where,
                           f"frame_{i:0{width}d}{suffix}", picture, curvature) for i, v in enumerate(values)]
     t0 = time.perf_counter()
     with _Progress(len(jobs_list), progress) as bar:
         results = map_ordered(mesh_frame, jobs_list, jobs=jobs, scheduler=scheduler,
                               on_done=lambda i, r: bar.step(f"{param} = {values[i]:.4g}"), capture=True)
     records = [r if isinstance(r, dict) else _failed(job, r) for r, job in zip(results, jobs_list)]
+    for r in records:
+        for name, content in sorted(r.pop("files", {}).items()):
+            (folder / name).write_bytes(content)
     times = [r.pop("time", None) for r in records]
 
     movie = None
@@ -267,8 +274,14 @@ def mesh_frame(job: FrameJob) -> dict[str, Any]:
     """Mesh, write and draw one frame; its record for ``sweep.json`` (and ``time``).
 
     A frame that fails gives a record with ``error``, not an exception: the
-    other frames go on.
+    other frames go on.  With ``job.out`` None the files are written into
+    a temporary folder and returned in the record (``files``: name -> bytes).
     """
+    if job.out is None:
+        with tempfile.TemporaryDirectory(prefix="singmesh-frame-") as tmp:
+            record = mesh_frame(replace(job, out=tmp))
+            record["files"] = {p.name: p.read_bytes() for p in Path(tmp).iterdir() if not p.name.startswith(".")}
+            return record
     from .api import mesh
 
     t0 = time.perf_counter()
