@@ -151,7 +151,8 @@ def run_all(entries: Sequence[gallery_lib.Entry], out: Path, *, jobs: int = 1, s
         bar.set_postfix_str(entries[i].name, refresh=False)
         bar.update()
 
-    work = partial(run_entry, out_dir=out, size=size, coarse=coarse, fine=fine, timeout=timeout)
+    # An absolute folder: a Dask worker need not run in this one.
+    work = partial(run_entry, out_dir=Path(out).resolve(), size=size, coarse=coarse, fine=fine, timeout=timeout)
     try:
         # Dask workers import the entries' function from gallery_lib, which
         # is not part of the installed package: it is sent to them.

@@ -256,6 +256,9 @@ def _sweep_command(argv: list[str]) -> int:
                    help="mesh the frames on Dask: 'local' (a LocalCluster of --jobs worker processes) or "
                         "a scheduler's address, e.g. tcp://10.0.0.5:8786 (same files, byte for byte)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; sweep the definition --name "
+                   "(on its box unless --box is given, its other parameters at the file's values)")
+    p.add_argument("--name", help="the definition to sweep (with --defs)")
     argv, numbers = _take_box(argv)
     argv, swept = _take_param(argv)
     takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
@@ -264,14 +267,29 @@ def _sweep_command(argv: list[str]) -> int:
     args.args = [hidden.get(a, a) for a in args.args]
     if swept is None:
         raise SurfaceError("give the parameter swept and its range: --param NAME LO HI")
-    if not args.args:
-        raise SurfaceError('give the equation, e.g. singmesh sweep "x^2+y^2-(z^2-a)^2" --param a -1 1 --out DIR')
-    box = DEFAULT_BOX if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
+    box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
+    if args.defs:
+        if not args.name:
+            raise SurfaceError("--defs needs --name NAME: the definition to sweep (singmesh defs FILE lists them)")
+        d = find_definition(read_definitions(args.defs), args.name)
+        d.surface()  # a definition that does not read is said with its place in the file
+        # The file's parameter values, but the one swept, under those given here.
+        surface = d.equation
+        params = {**{k: str(v) for k, v in d.parameters.items() if k != swept[0]}, **_params(args.args)}
+        box = box or d.box
+    else:
+        if args.name:
+            raise SurfaceError("--name goes with --defs FILE")
+        if not args.args:
+            raise SurfaceError('give the equation, e.g. singmesh sweep "x^2+y^2-(z^2-a)^2" --param a -1 1 '
+                               "--out DIR, or --defs FILE --name NAME")
+        surface, params = args.args[0], _params(args.args[1:])
+    box = box or DEFAULT_BOX
     animation = None if args.animation.lower() == "none" or args.picture_size == 0 else args.animation
-    result = sweep(args.args[0], *swept, args.frames, box, out=args.out, **_mesh_settings(args),
+    result = sweep(surface, *swept, args.frames, box, out=args.out, **_mesh_settings(args),
                    curvature=not args.no_curvature, mesh_format=args.format, animation=animation,
                    fps=args.fps, picture_size=args.picture_size, jobs=args.jobs, scheduler=args.scheduler,
-                   progress=not args.quiet, **_params(args.args[1:]))
+                   progress=not args.quiet, **params)
     if not args.quiet:
         print(result.table())
         for b in result.bifurcations:

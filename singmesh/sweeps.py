@@ -189,15 +189,22 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
         is meshed); :class:`singmesh.extras.MissingExtraError` when the
         pictures, the animation or Dask are asked for without their packages.
     """
+    from singmesh.boxes.sizing import sizing_levels
+
     from .api import DEFAULT_BOX, _level
+    from .memory import parse_size
     from .mesh import FORMATS
     from .parallel import map_ordered
 
     box = DEFAULT_BOX if box is None else box
     values = _values(lo, hi, frames)
     b = _check(surface, param, values, params, box)
-    _level(coarse, "coarse")
-    _level(fine, "fine")
+    # mesh()'s settings are checked once here, not failed in every frame.
+    if _level(fine, "fine") < _level(coarse, "coarse"):
+        raise SurfaceError(f"fine ({fine}) must be at least coarse ({coarse})")
+    sizing_levels(size, min_edge, max_edge, chord, _level(fine, "fine"))
+    if max_memory is not None:
+        parse_size(max_memory)
     suffix = "." + str(mesh_format).lstrip(".").lower()
     if suffix not in FORMATS:
         raise SurfaceError(f"unknown mesh format {mesh_format!r}: use one of {', '.join(sorted(FORMATS))}")

@@ -158,6 +158,11 @@ def test_sweep_bad_input_is_one_line(tmp_path, capsys):
         singmesh.sweep("x^2 + y^2 - z^2 - a", "b", 0, 1, 3, out=tmp_path / "never")
     with pytest.raises(SurfaceError, match="frames"):
         singmesh.sweep("x^2 + y^2 - z^2 - a", "a", 0, 1, 0, out=tmp_path / "never")
+    # mesh()'s settings are refused once, before the frames, not in each.
+    with pytest.raises(SurfaceError, match="at least coarse"):
+        singmesh.sweep("x^2 + y^2 - z^2 - a", "a", 0, 1, 2, out=tmp_path / "never", coarse=64, fine=32)
+    with pytest.raises(SurfaceError, match="size must be"):
+        singmesh.sweep("x^2 + y^2 - z^2 - a", "a", 0, 1, 2, out=tmp_path / "never", size="tiny")
     with pytest.raises(SurfaceError, match="cannot also be given"):
         singmesh.sweep("x^2 + y^2 - z^2 - a", "a", 0, 1, 2, out=tmp_path / "never", a=1)
     assert not (tmp_path / "never").exists()
@@ -267,3 +272,47 @@ def test_the_renderer_without_matplotlib_names_the_install(monkeypatch):
     monkeypatch.delitem(sys.modules, "singmesh.render", raising=False)
     with pytest.raises(MissingExtraError, match=r"drawing pictures needs matplotlib.*pip install 'singmesh\[sweep\]'"):
         importlib.import_module("singmesh.render")
+
+
+DEFS = """\
+<definition name="A3 family" type="asurf">
+x^2 + y^2 - (z^2 - a)^2 + b;
+<parameter name="a" value="0.1" />
+<parameter name="b" value="0.5" />
+<variable name="x" min="-1" max="1">
+<variable name="y" min="-1" max="1">
+<variable name="z" min="-0.9" max="0.9">
+</definition>
+"""
+
+
+def test_cli_sweeps_a_definition_of_a_defs_file(tmp_path):
+    path = tmp_path / "family.defs"
+    path.write_text(DEFS, encoding="utf-8")
+    args = ["sweep", "--defs", str(path), "--name", "A3 family", "--param", "a", "0", "0.25", "--frames", "2",
+            "--coarse", "8", "--fine", "32", "--picture-size", "0", "--quiet"]
+    # b = 0.5 from the file: x^2 + y^2 + 0.5 = (z^2 - a)^2 has no singular point (F = 0.5 there).
+    assert main([*args, "--out", str(tmp_path / "file")]) == 0
+    data = json.loads((tmp_path / "file" / "sweep.json").read_text())
+    assert data["box"] == [[-1, 1], [-1, 1], [-0.9, 0.9]] and data["params"] == {"b": "0.5"}
+    assert [f["counts"] for f in data["frames"]] == [{}, {}]
+    # b = 0 given here: the A3 at a = 0, two A1 at z = +-0.5 at a = 0.25.
+    assert main([*args, "b=0", "--out", str(tmp_path / "given")]) == 0
+    frames = json.loads((tmp_path / "given" / "sweep.json").read_text())["frames"]
+    assert [f["counts"] for f in frames] == [{"A3": 1}, {"A1": 2}]
+    assert sorted(p["point"][2] for p in frames[1]["singular_points"]) == pytest.approx([-0.5, 0.5], abs=1e-9)
+
+
+def test_sweep_mp4_animation(tmp_path):
+    pytest.importorskip("imageio_ffmpeg", reason="MP4 needs imageio-ffmpeg (pip install 'singmesh[video]')")
+    import imageio.v3 as iio
+
+    result = singmesh.sweep("x^2 + y^2 - z^2 - a", "a", -0.2, 0.2, 3, BOX, out=tmp_path, coarse=8, fine=32,
+                            picture_size=96, animation="cone.mp4", fps=2)
+    frames = iio.imread(result.animation, index=None, extension=".mp4")
+    assert frames.shape[:3] == (3, 96, 96)
+    # Lossy, but each frame is its picture: nearer to it than to the other frames' pictures.
+    pictures = [iio.imread(tmp_path / f["picture"])[..., :3].astype(float) for f in result.frames]
+    for i, f in enumerate(frames.astype(float)):
+        d = [np.abs(f - p).mean() for p in pictures]
+        assert int(np.argmin(d)) == i, d
