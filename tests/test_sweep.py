@@ -179,11 +179,15 @@ def test_sweep_bad_input_is_one_line(tmp_path, capsys):
     assert not (tmp_path / "never").exists()
 
 
-def test_cli_sweep_in_two_processes_writes_what_the_python_sweep_writes(tmp_path, capsys):
+def test_cli_sweep_on_a_local_dask_cluster_writes_what_the_python_sweep_writes(tmp_path, capsys):
+    pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install 'singmesh[dask]')")
     # A negative bound in exponent notation is a number, not an option.
     args = ["x^2 + y^2 - z^2 - a", "--param", "a", "-2e-1", "0.2", "--frames", "3", "--box", "-1", "1", "-1", "1",
             "-1", "1", "--coarse", "8", "--fine", "32", "--picture-size", "96"]
-    assert main(["sweep", *args, "--out", str(tmp_path / "cli"), "--jobs", "2", "--quiet"]) == 0
+    # --scheduler local: a LocalCluster of two worker processes, started and closed by the sweep.
+    assert main(["sweep", *args, "--out", str(tmp_path / "cli"), "--jobs", "2", "--scheduler", "local",
+                 "--quiet"]) == 0
+    assert json.loads((tmp_path / "cli" / "times.json").read_text())["scheduler"] == "local"
     local = singmesh.sweep("x^2 + y^2 - z^2 - a", "a", -0.2, 0.2, 3, BOX, out=tmp_path / "py", coarse=8, fine=32,
                            picture_size=96)
     assert local.frames[1]["counts"] == {"A1": 1}  # the cone at a = 0 only
