@@ -14,7 +14,9 @@ records written from them are the same bytes however they ran.
   processes of one thread each on this machine;
 - an address (``"tcp://10.0.0.5:8786"``): the Dask scheduler of a running
   cluster.  The workers need singmesh installed (the same version), and can
-  be given further modules with ``upload``.
+  be given further modules with ``upload``;
+- a :class:`dask.distributed.Client` already connected (a notebook's): used
+  as it is, and left open.
 
 Worker processes rather than threads: mesh() limits BLAS per process, and
 ``warnings.catch_warnings`` and matplotlib's pyplot are not thread-safe.
@@ -30,7 +32,7 @@ from .extras import require
 
 
 def map_ordered(fn: Callable[[Any], Any], items: Sequence[Any], *, jobs: int = 1,
-                scheduler: str | None = None, upload: Sequence[str | Path] = (),
+                scheduler: Any = None, upload: Sequence[str | Path] = (),
                 on_done: Callable[[int, Any], None] | None = None,
                 capture: bool = False) -> list[Any]:
     """``[fn(item) for item in items]``, run in parallel as asked, in the input order.
@@ -44,9 +46,9 @@ def map_ordered(fn: Callable[[Any], Any], items: Sequence[Any], *, jobs: int = 1
     jobs : int
         Local processes (``scheduler=None``) or the LocalCluster's workers
         (``scheduler="local"``); not used with an address.
-    scheduler : str, optional
-        None, ``"local"`` or the address of a Dask scheduler (see the module
-        docstring).
+    scheduler : str or dask.distributed.Client, optional
+        None, ``"local"``, the address of a Dask scheduler or a Client (see
+        the module docstring).
     upload : sequence of paths
         Python files sent to the Dask workers (``Client.upload_file``), for
         ``fn`` defined outside an installed package (the gallery's
@@ -110,7 +112,10 @@ def _on_dask(fn, items: list, jobs: int, scheduler: str, upload, on_done, captur
     from distributed import Client, LocalCluster, as_completed as dask_completed
 
     cluster = None
-    if scheduler == "local":
+    own = True  # a client made here is closed here
+    if isinstance(scheduler, Client):
+        client, own = scheduler, False
+    elif scheduler == "local":
         # Processes, one thread each (see the module docstring); no
         # dashboard: its port may be taken, and nobody looks at it here.
         cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
@@ -137,6 +142,7 @@ def _on_dask(fn, items: list, jobs: int, scheduler: str, upload, on_done, captur
                 on_done(i, results[i])
         return results
     finally:
-        client.close()
+        if own:
+            client.close()
         if cluster is not None:
             cluster.close()

@@ -132,7 +132,7 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
           coarse: int = 32, fine: int = 256, improve: bool = True, size: str = "uniform",
           min_edge: float | None = None, max_edge: float | None = None, chord: float | None = None,
           max_memory=None, curvature: bool = True, mesh_format: str = "ply", animation: str | None = "sweep.gif",
-          fps: float = 4.0, picture_size: int = 480, jobs: int = 1, scheduler: str | None = None,
+          fps: float = 4.0, picture_size: int = 480, jobs: int = 1, scheduler: Any = None,
           progress: bool = False, **params) -> SweepResult:
     """Mesh ``surface`` at ``frames`` values of ``param`` from ``lo`` to ``hi`` and write the sweep.
 
@@ -169,9 +169,9 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
         Side of the pictures in pixels; 0: no pictures (nor animation).
     jobs : int
         Frames meshed at once (local processes, or LocalCluster workers).
-    scheduler : str, optional
-        Mesh the frames on Dask: ``"local"`` or a scheduler's address
-        (:func:`singmesh.parallel.map_ordered`).
+    scheduler : str or dask.distributed.Client, optional
+        Mesh the frames on Dask: ``"local"``, a scheduler's address or a
+        connected Client (:func:`singmesh.parallel.map_ordered`).
     progress : bool
         Show a progress bar (tqdm if installed, else a line per frame) on
         standard error.
@@ -272,7 +272,8 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
     (folder / "sweep.json").write_text(json.dumps(_clean(data), indent=1, allow_nan=False) + "\n",
                                        encoding="utf-8")
     (folder / "times.json").write_text(json.dumps(
-        {"total": time.perf_counter() - t0, "frames": times, "jobs": jobs, "scheduler": scheduler},
+        {"total": time.perf_counter() - t0, "frames": times, "jobs": jobs,
+         "scheduler": scheduler if scheduler is None or isinstance(scheduler, str) else repr(scheduler)},
         indent=1) + "\n", encoding="utf-8")
     return SweepResult(data=_clean(data), folder=folder, animation=movie, times=times)
 

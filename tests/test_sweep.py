@@ -207,7 +207,7 @@ def _same_files(a: Path, b: Path, skip=()) -> None:
 # ---------------------------------------------------------------- Dask
 def test_sweep_and_gallery_on_dask_are_byte_for_byte_the_local_runs(tmp_path):
     pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install 'singmesh[dask]')")
-    from distributed import LocalCluster
+    from distributed import Client, LocalCluster
 
     text, q, c = _family()
     settings = dict(coarse=8, fine=32, picture_size=96)
@@ -215,16 +215,19 @@ def test_sweep_and_gallery_on_dask_are_byte_for_byte_the_local_runs(tmp_path):
     gallery = _load_generate()
     only = ["--only", "sphere", "cross-cap", "--coarse", "8", "--fine", "32", "--size", "96", "--quiet"]
     assert gallery.main(["--out", str(tmp_path / "gallery_local"), *only]) == 0
-    # A scheduler and two worker processes on this machine, reached by address.
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    # A scheduler and two worker processes on this machine: the gallery reaches
+    # it by address, the sweep through a Client of the caller's (left open).
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
         address = cluster.scheduler_address
-        on_dask = singmesh.sweep(text, "a", 0.0, 0.3, 3, BOX, out=tmp_path / "dask", scheduler=address,
+        on_dask = singmesh.sweep(text, "a", 0.0, 0.3, 3, BOX, out=tmp_path / "dask", scheduler=client,
                                  **settings)
+        assert client.status == "running"
         assert gallery.main(["--out", str(tmp_path / "gallery_dask"), "--scheduler", address, *only]) == 0
     assert on_dask.data == local.data
     assert local.frames[0]["counts"] == {"A3": 1} and local.frames[2]["counts"] == {"A1": 2}
     _same_files(tmp_path / "local", tmp_path / "dask", skip={"times.json"})
-    assert json.loads((tmp_path / "dask" / "times.json").read_text())["scheduler"] == address
+    assert "Client" in json.loads((tmp_path / "dask" / "times.json").read_text())["scheduler"]
     files = [p.name for p in (tmp_path / "gallery_local").iterdir() if p.suffix in (".ply", ".obj", ".png")]
     assert len(files) == 6
     for name in files:
