@@ -109,7 +109,9 @@ def _values(lo: float, hi: float, frames: int) -> list[float]:
         raise SurfaceError(f"the parameter's range {lo:g} .. {hi:g} is not finite")
     if frames == 1:
         return [lo]
-    return [float(v) for v in np.linspace(lo, hi, frames)]
+    # To 12 digits: the frames are meshed at the values the table shows
+    # (0.075, not linspace's 0.07500000000000001).
+    return [float(f"{v:.12g}") for v in np.linspace(lo, hi, frames)]
 
 
 def _check(surface, param: str, values: list[float], params: dict, box) -> np.ndarray:

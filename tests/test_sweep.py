@@ -77,7 +77,7 @@ def family_sweep(tmp_path_factory):
 def test_sweep_table_is_the_a3_transition(family_sweep):
     result, text, q, c = family_sweep
     frames = result.frames
-    assert [f["value"] for f in frames] == pytest.approx(np.linspace(LO, HI, FRAMES).tolist(), abs=0)
+    assert [f["value"] for f in frames] == [-0.3, -0.15, 0.0, 0.15, 0.3]
     counts = []
     for fr in frames:
         assert not fr.get("error"), fr
@@ -95,6 +95,11 @@ def test_sweep_table_is_the_a3_transition(family_sweep):
         counts.append(fr["counts"])
     # a < 0: none; a = 0: A3; a > 0: two A1.  The table says where it changes.
     assert counts == [{}, {}, {"A3": 1}, {"A1": 2}, {"A1": 2}]
+    # By hand, the box cutting each end in one circle: a tube (annulus) for
+    # a < 0; two discs touching at the A3 (1 + 1 - 1); two discs and the
+    # sphere between the A1 points, glued at them (1 + 2 + 1 - 2).
+    assert [fr["euler"] for fr in frames] == [0, 0, 1, 2, 2]
+    assert [fr["components"] for fr in frames] == [1] * FRAMES
     assert [(b["frames"], b["before"], b["after"]) for b in result.bifurcations] == [
         ([1, 2], {}, {"A3": 1}), ([2, 3], {"A3": 1}, {"A1": 2})]
     on_disk = json.loads((result.folder / "sweep.json").read_text(encoding="utf-8"))
