@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 import tempfile
 import time
@@ -271,8 +272,7 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
         "frames": records,
         "bifurcations": bifurcations(records),
     }
-    (folder / "sweep.json").write_text(json.dumps(_clean(data), indent=1, allow_nan=False) + "\n",
-                                       encoding="utf-8")
+    (folder / "sweep.json").write_text(_dumps(_clean(data)), encoding="utf-8")
     (folder / "times.json").write_text(json.dumps(
         {"total": time.perf_counter() - t0, "frames": times, "jobs": jobs,
          "scheduler": scheduler if scheduler is None or isinstance(scheduler, str) else repr(scheduler)},
@@ -394,6 +394,16 @@ def write_animation(path: Path, pictures: Sequence[Path], fps: float) -> Path:
     else:
         iio.imwrite(path, frames, extension=".mp4", fps=fps)
     return path
+
+
+#: A JSON list of numbers only (no strings, lists or objects in it), as json.dumps indents it.
+_NUMBER_LIST = re.compile(r"\[\s+([^\[\]{}\"]*?)\s+\]")
+
+
+def _dumps(data: dict) -> str:
+    """``data`` as indented JSON with each list of numbers on one line (points, boxes, ranges)."""
+    text = json.dumps(data, indent=1, allow_nan=False)
+    return _NUMBER_LIST.sub(lambda m: "[" + ", ".join(v.strip() for v in m.group(1).split(",")) + "]", text) + "\n"
 
 
 def _clean(value):
