@@ -239,6 +239,9 @@ def _sweep_command(argv: list[str]) -> int:
     p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
                    help='the equation with the parameter, e.g. "x^2 + y^2 - (z^2 - a)^2", then the values '
                         "of its other parameters")
+    # (Taken out before argparse, as --box is: LO may be -1e-3; listed here for --help.)
+    p.add_argument("--param", nargs=3, metavar=("NAME", "LO", "HI"),
+                   help="the parameter swept, from LO to HI (both included)")
     p.add_argument("--frames", type=int, default=9, help="number of values of the parameter (default 9)")
     p.add_argument("--out", required=True, metavar="DIR", help="the folder written")
     p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
