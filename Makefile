@@ -8,7 +8,7 @@ EXAMPLE ?= 4(x^2+y^2+z^2) + 16 x y z - 1
 $(STAMP): pyproject.toml
 	python3 -m venv .venv
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,bench,gallery]"
+	$(PY) -m pip install --quiet -e ".[test,bench,gallery,sweep,dask]"
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -435,7 +435,7 @@ def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
     # limit is armed: an alarm in the middle of an import would leave a
     # half-initialised module behind in sys.modules.
     import singmesh  # noqa: F401
-    import gallery_render  # noqa: F401
+    import singmesh.render  # noqa: F401
 
     out = Path(out_dir)
     record: dict[str, Any] = {
@@ -494,7 +494,7 @@ def _mesh_and_draw(entry: Entry, out: Path, size: int, coarse: int | None, fine:
                    record: dict[str, Any]) -> None:
     """The work of :func:`run_entry`; fills ``record`` as it goes, ``stage`` says how far."""
     import singmesh
-    from gallery_render import render_png
+    from singmesh.render import render_png
     from singmesh.view import view_json
 
     # A definition of a .defs file that does not read is the file's, not a failure.

@@ -4,7 +4,7 @@ Usage::
 
     python gallery/generate.py [--out DIR] [--only NAME ...] [--jobs N] [--size PX]
                                [--catalogue PATH | --defs FILE] [--coarse N] [--fine N] [--timeout SECONDS]
-                               [--strict] [--quiet]
+                               [--strict] [--quiet] [--scheduler local|ADDRESS]
 
 For each entry of ``catalogue.toml`` (or the entries whose names contain one
 of the ``--only`` substrings, case-insensitive) this meshes the surface,
@@ -19,6 +19,12 @@ per definition, grouped as the file groups them, each on its own box with
 its parameters; a definition that does not read gets its line in the index
 with the reason.
 
+With ``--scheduler`` the entries are meshed on Dask (``local``: a
+LocalCluster of ``--jobs`` worker processes on this machine; or a running
+scheduler's address); the files are the same bytes as a local run's.  The
+``--timeout`` limit needs the main thread of a process (SIGALRM): Dask
+workers run the entries in their own threads and do not apply it.
+
 Exit status: 0 when the site was written (even if entries failed or differ
 from the catalogue; ``--strict`` makes failed entries exit 1), 2 for bad
 arguments or an unreadable catalogue.
@@ -29,11 +35,10 @@ from __future__ import annotations
 import argparse
 import datetime as _dt
 import json
-import multiprocessing
 import platform
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from functools import partial
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -47,7 +52,18 @@ if str(HERE) not in sys.path:
 import gallery_lib  # noqa: E402
 from gallery_lib import CatalogueError, load_catalogue, load_definitions, run_entry, select  # noqa: E402
 
+from singmesh.errors import SurfaceError  # noqa: E402
+from singmesh.extras import require  # noqa: E402
+
 DEFAULT_OUT = HERE / "out"
+
+
+def check_extras(scheduler: str | None = None) -> None:
+    """MissingExtraError naming the pip install when a package the gallery uses is missing."""
+    require("the gallery", ["matplotlib", "tqdm"] + (["tomli"] if sys.version_info < (3, 11) else []),
+            extra="gallery")
+    if scheduler:
+        require("--scheduler (Dask)", ["dask", "distributed"], extra="dask")
 
 
 def _power_of_two(text: str) -> int:
@@ -74,6 +90,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="only entries whose names contain one of these (case-insensitive)")
     p.add_argument("--jobs", type=_positive, default=1, metavar="N",
                    help="mesh entries in N processes (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="mesh the entries on Dask: 'local' (a LocalCluster of --jobs worker processes) or "
+                        "the address of a running scheduler, e.g. tcp://10.0.0.5:8786 (pip install "
+                        "'singmesh[dask]'; the results are the same bytes)")
     p.add_argument("--size", type=_positive, default=640, metavar="PX",
                    help="picture width and height in pixels (default 640)")
     p.add_argument("--catalogue", default=str(gallery_lib.DEFAULT_CATALOGUE), metavar="PATH",
@@ -107,8 +127,12 @@ def _failure(entry: gallery_lib.Entry, message: str) -> dict[str, Any]:
 
 def run_all(entries: Sequence[gallery_lib.Entry], out: Path, *, jobs: int = 1, size: int = 640,
             coarse: int | None = None, fine: int | None = None, timeout: float | None = None,
-            progress: bool = True) -> list[dict]:
-    """Run every entry, in parallel processes if ``jobs > 1``.
+            progress: bool = True, scheduler: str | None = None) -> list[dict]:
+    """Run every entry, in parallel processes if ``jobs > 1``, or on Dask with ``scheduler``.
+
+    ``scheduler``: ``"local"`` (a LocalCluster of ``jobs`` workers) or a
+    Dask scheduler's address (:func:`singmesh.parallel.map_ordered`); the
+    files written are the same bytes as without it.
 
     Returns
     -------
@@ -118,34 +142,28 @@ def run_all(entries: Sequence[gallery_lib.Entry], out: Path, *, jobs: int = 1, s
     """
     from tqdm import tqdm
 
-    results: list[dict | None] = [None] * len(entries)
+    from singmesh.parallel import map_ordered
+
     bar = tqdm(total=len(entries), desc="gallery", unit="surface", disable=not progress,
                dynamic_ncols=True)
+
+    def done(i: int, result) -> None:
+        bar.set_postfix_str(entries[i].name, refresh=False)
+        bar.update()
+
+    # An absolute folder: a Dask worker need not run in this one.
+    work = partial(run_entry, out_dir=Path(out).resolve(), size=size, coarse=coarse, fine=fine, timeout=timeout)
     try:
-        if jobs <= 1 or len(entries) <= 1:
-            for i, e in enumerate(entries):
-                bar.set_postfix_str(e.name, refresh=False)
-                results[i] = run_entry(e, out, size, coarse, fine, timeout)
-                bar.update()
-        else:
-            # spawn: a clean interpreter per worker.  fork would copy the
-            # parent's threads (tqdm's monitor) and matplotlib state, which
-            # is unsafe; spawn also behaves the same on every platform.
-            ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=min(jobs, len(entries)), mp_context=ctx) as pool:
-                futures = {pool.submit(run_entry, e, out, size, coarse, fine, timeout): i
-                           for i, e in enumerate(entries)}
-                for fut in as_completed(futures):
-                    i = futures[fut]
-                    try:
-                        results[i] = fut.result()
-                    except Exception as exc:  # the worker process died (crash, out of memory)
-                        results[i] = _failure(entries[i], f"{type(exc).__name__}: {exc}")
-                    bar.set_postfix_str(entries[i].name, refresh=False)
-                    bar.update()
+        # Dask workers import the entries' function from gallery_lib, which
+        # is not part of the installed package: it is sent to them.
+        results = map_ordered(work, entries, jobs=jobs, scheduler=scheduler, on_done=done, capture=True,
+                              upload=[HERE / "gallery_lib.py"] if scheduler else ())
     finally:
         bar.close()
-    return [r if r is not None else _failure(e, "not run") for r, e in zip(results, entries)]
+    # An exception here is the worker's death (crash, out of memory):
+    # run_entry records every failure of the entry itself.
+    return [_failure(e, f"{type(r).__name__}: {r}") if isinstance(r, BaseException)
+            else r if r is not None else _failure(e, "not run") for r, e in zip(results, entries)]
 
 
 def _meta(jobs: int, total_time: float, catalogue: Path) -> dict[str, Any]:
@@ -180,6 +198,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         Exit status (see the module docstring).
     """
     args = build_parser().parse_args(None if argv is None else list(argv))
+    try:
+        check_extras(args.scheduler)
+    except SurfaceError as exc:
+        print(f"gallery: error: {exc}", file=sys.stderr)
+        return 2
     catalogue = Path(args.defs or args.catalogue)
     try:
         groups, entries = load_definitions(catalogue) if args.defs else load_catalogue(catalogue)
@@ -199,7 +222,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     t0 = time.perf_counter()
     records = run_all(chosen, out, jobs=args.jobs, size=args.size, coarse=args.coarse,
-                      fine=args.fine, timeout=args.timeout, progress=not args.quiet)
+                      fine=args.fine, timeout=args.timeout, progress=not args.quiet, scheduler=args.scheduler)
     total = time.perf_counter() - t0
 
     from gallery_html import counts, write_site

@@ -6,7 +6,9 @@ meshes, writes (with the per-vertex curvatures as point data in PLY, VTK
 and VTU files, unless ``--no-curvature``) and prints the report (with the triangles' angles) (``--defs FILE --name NAME`` instead of
 the equation meshes a definition of a SingSurf file on its own box);
 ``singmesh defs FILE`` lists such a file; ``singmesh classify "EQUATION" --at X Y Z``
-names a singular point; ``singmesh gallery ...`` builds the gallery.  Bad
+names a singular point; ``singmesh gallery ...`` builds the gallery;
+``singmesh sweep "EQUATION" --param NAME LO HI --frames N --out DIR`` meshes
+a family at N values of a parameter (:mod:`singmesh.sweeps`).  Bad
 input prints one error line and exits with status 2.
 """
 
@@ -127,17 +129,8 @@ def _check_output(output: str) -> None:
         raise SurfaceError(f"cannot write {output}: {exc.strerror or exc}") from None
 
 
-def _mesh_command(argv: list[str]) -> int:
-    from .api import DEFAULT_BOX, mesh
-
-    p = _Parser(prog="singmesh mesh", description="Mesh F(x, y, z) = 0 in a box.")
-    p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
-                   help='the equation, e.g. "4(x^2+y^2+z^2) + 16 x y z - 1", then parameter values '
-                        "(with --defs: parameter values only)")
-    p.add_argument("-o", "--output", help="mesh file; the format comes from the suffix "
-                   "(.ply .obj .stl .vtk .vtu .off; .html: a page with the interactive 3-D view)")
-    p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
-                   help="the region meshed (default -2 2 -2 2 -2 2, or the definition's box)")
+def _add_mesh_options(p: argparse.ArgumentParser) -> None:
+    """mesh()'s settings, shared by ``singmesh mesh`` and ``singmesh sweep``."""
     p.add_argument("--coarse", type=int, default=32,
                    help="boxes per axis of the uniform subdivision (power of two; default 32)")
     p.add_argument("--fine", type=int, default=256,
@@ -160,6 +153,27 @@ def _mesh_command(argv: list[str]) -> int:
     p.add_argument("--max-memory", metavar="SIZE",
                    help="refuse a request estimated to need more memory than this (e.g. 2G, 512M; "
                         "the machine's available memory is always a limit)")
+
+
+def _mesh_settings(args: argparse.Namespace) -> dict:
+    """The keyword arguments of mesh() from the options of :func:`_add_mesh_options`."""
+    return {"coarse": args.coarse, "fine": args.fine, "improve": not args.no_improve, "size": args.size,
+            "min_edge": args.min_edge, "max_edge": args.max_edge, "chord": args.chord,
+            "max_memory": args.max_memory}
+
+
+def _mesh_command(argv: list[str]) -> int:
+    from .api import DEFAULT_BOX, mesh
+
+    p = _Parser(prog="singmesh mesh", description="Mesh F(x, y, z) = 0 in a box.")
+    p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
+                   help='the equation, e.g. "4(x^2+y^2+z^2) + 16 x y z - 1", then parameter values '
+                        "(with --defs: parameter values only)")
+    p.add_argument("-o", "--output", help="mesh file; the format comes from the suffix "
+                   "(.ply .obj .stl .vtk .vtu .off; .html: a page with the interactive 3-D view)")
+    p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
+                   help="the region meshed (default -2 2 -2 2 -2 2, or the definition's box)")
+    _add_mesh_options(p)
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     argv, numbers = _take_box(argv)
@@ -200,6 +214,101 @@ def _mesh_command(argv: list[str]) -> int:
         if m.singular_curves and FORMATS.get(path.suffix.lower()) not in LINE_FORMATS + ("html",):
             print(f"curves written       {path.with_suffix('.curves.vtk')} (the format has no line cells)")
     return 0
+
+
+def _take_param(argv: list[str]) -> tuple[list[str], tuple[str, float, float] | None]:
+    """``argv`` without ``--param NAME LO HI``, and the three (numbers read as :func:`_take_box` does)."""
+    if "--param" not in argv:
+        return argv, None
+    i = argv.index("--param")
+    if "--param" in argv[i + 1:]:
+        raise SurfaceError("--param is given twice: one parameter is swept (give the others as name=value)")
+    given = argv[i + 1:i + 4]
+    if len(given) < 3 or not all(_is_number(w) for w in given[1:]):
+        raise SurfaceError(f"--param takes a name and two numbers, NAME LO HI; got {' '.join(given)!r}")
+    return argv[:i] + argv[i + 4:], (given[0], float(given[1]), float(given[2]))
+
+
+def _sweep_command(argv: list[str]) -> int:
+    from .api import DEFAULT_BOX
+    from .sweeps import sweep
+
+    p = _Parser(prog="singmesh sweep",
+                description="Mesh F(x, y, z; a) = 0 at N values of a: one mesh and picture per frame, "
+                            "an animation and DIR/sweep.json, the singular points frame by frame.")
+    p.add_argument("args", nargs="*", metavar="EQUATION [name=value ...]",
+                   help='the equation with the parameter, e.g. "x^2 + y^2 - (z^2 - a)^2", then the values '
+                        "of its other parameters")
+    # (Taken out before argparse, as --box is: LO may be -1e-3; listed here for --help.)
+    p.add_argument("--param", nargs=3, metavar=("NAME", "LO", "HI"),
+                   help="the parameter swept, from LO to HI (both included)")
+    p.add_argument("--frames", type=int, default=9, help="number of values of the parameter (default 9)")
+    p.add_argument("--out", required=True, metavar="DIR", help="the folder written")
+    p.add_argument("--box", nargs=6, type=float, metavar=("X0", "X1", "Y0", "Y1", "Z0", "Z1"),
+                   help="the region meshed, the same for every frame (default -2 2 -2 2 -2 2)")
+    _add_mesh_options(p)
+    p.add_argument("--format", default="ply", help="the mesh files' format (suffix; default ply)")
+    p.add_argument("--animation", default="sweep.gif", metavar="FILE",
+                   help="the animation's file name in DIR: .gif (default sweep.gif) or .mp4 (needs "
+                        "imageio-ffmpeg); 'none' for no animation")
+    p.add_argument("--fps", type=float, default=4.0, help="animation frames per second (default 4)")
+    p.add_argument("--picture-size", type=int, default=480, metavar="PX",
+                   help="side of each frame's picture in pixels (default 480; 0: no pictures)")
+    p.add_argument("--jobs", type=int, default=1, metavar="N", help="frames meshed at once (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="mesh the frames on Dask: 'local' (a LocalCluster of --jobs worker processes) or "
+                        "a scheduler's address, e.g. tcp://10.0.0.5:8786 (same files, byte for byte)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; sweep the definition --name "
+                   "(on its box unless --box is given, its other parameters at the file's values)")
+    p.add_argument("--name", help="the definition to sweep (with --defs)")
+    argv, numbers = _take_box(argv)
+    argv, swept = _take_param(argv)
+    takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
+    argv, hidden = _hide_leading_minus(argv, takes_value)
+    args = p.parse_args(argv)
+    args.args = [hidden.get(a, a) for a in args.args]
+    if swept is None:
+        raise SurfaceError("give the parameter swept and its range: --param NAME LO HI")
+    box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
+    if args.defs:
+        if not args.name:
+            raise SurfaceError("--defs needs --name NAME: the definition to sweep (singmesh defs FILE lists them)")
+        d = find_definition(read_definitions(args.defs), args.name)
+        d.surface()  # a definition that does not read is said with its place in the file
+        # The file's parameter values, but the one swept, under those given here.
+        surface = d.equation
+        params = {**{k: str(v) for k, v in d.parameters.items() if k != swept[0]}, **_params(args.args)}
+        box = box or d.box
+    else:
+        if args.name:
+            raise SurfaceError("--name goes with --defs FILE")
+        if not args.args:
+            raise SurfaceError('give the equation, e.g. singmesh sweep "x^2+y^2-(z^2-a)^2" --param a -1 1 '
+                               "--out DIR, or --defs FILE --name NAME")
+        surface, params = args.args[0], _params(args.args[1:])
+    box = box or DEFAULT_BOX
+    animation = None if args.animation.lower() == "none" or args.picture_size == 0 else args.animation
+    result = sweep(surface, *swept, args.frames, box, out=args.out, **_mesh_settings(args),
+                   curvature=not args.no_curvature, mesh_format=args.format, animation=animation,
+                   fps=args.fps, picture_size=args.picture_size, jobs=args.jobs, scheduler=args.scheduler,
+                   progress=not args.quiet, **params)
+    if not args.quiet:
+        print(result.table())
+        for b in result.bifurcations:
+            print(f"change between {swept[0]} = {b['between'][0]:.6g} and {b['between'][1]:.6g}: "
+                  f"{_counts_text(b['before'], b['curves_before'])} -> {_counts_text(b['after'], b['curves_after'])}")
+        print(f"written              {result.folder / 'sweep.json'}")
+        if result.animation is not None:
+            print(f"animation            {result.animation}")
+    return 0
+
+
+def _counts_text(points: dict, curves: dict) -> str:
+    text = " + ".join(f"{n} {t}" for t, n in points.items()) or "none"
+    if curves:
+        text += " (curves: " + " + ".join(f"{n} {t}" for t, n in curves.items()) + ")"
+    return text
 
 
 def _defs_command(argv: list[str]) -> int:
@@ -262,24 +371,33 @@ def _gallery_command(argv: list[str]) -> int:
         print("singmesh: error: the gallery script is in the source tree (gallery/generate.py); "
               "run it from a checkout", file=sys.stderr)
         return 2
+    from .extras import require
+
+    # Before the script's imports, which would end in a traceback.
+    require("singmesh gallery", ["matplotlib", "tqdm"] + (["tomli"] if sys.version_info < (3, 11) else []),
+            extra="gallery")
+    if "--scheduler" in argv or any(a.startswith("--scheduler=") for a in argv):
+        require("--scheduler (Dask)", ["dask", "distributed"], extra="dask")
     sys.argv = [str(script)] + argv
     runpy.run_path(str(script), run_name="__main__")
     return 0
 
 
 COMMANDS = {"mesh": _mesh_command, "defs": _defs_command, "classify": _classify_command,
-            "gallery": _gallery_command}
+            "gallery": _gallery_command, "sweep": _sweep_command}
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
-        print("usage: singmesh {mesh,defs,classify,gallery} ...\n"
+        print("usage: singmesh {mesh,defs,classify,gallery,sweep} ...\n"
               '  singmesh mesh "x^2+y^2-z^2" -o cone.ply [--box X0 X1 Y0 Y1 Z0 Z1] [--coarse N] [a=1 ...]\n'
               "  singmesh mesh --defs FILE --name NAME -o out.ply [a=1 ...]\n"
               "  singmesh defs FILE [--check] [--name NAME]\n"
               '  singmesh classify "x^2+y^2-z^2" --at 0 0 0\n'
-              "  singmesh gallery [--out DIR] [--only NAME ...] [--jobs N]", file=sys.stderr)
+              "  singmesh gallery [--out DIR] [--only NAME ...] [--jobs N] [--scheduler local|ADDRESS]\n"
+              '  singmesh sweep "x^2+y^2-(z^2-a)^2" --param a -1 1 --frames 9 --out DIR [--box ...] '
+              "[--jobs N] [--scheduler local|ADDRESS]", file=sys.stderr)
         return 0 if argv and argv[0] in ("-h", "--help") else 2
     import warnings
 

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from .extras import MissingExtraError
 
-class MissingExtraError(ImportError):
-    """An optional library a function needs is not installed (the message names the pip command)."""
+
 
 
 def require(module: str, extra: str, what: str) -> Any:
@@ -33,7 +33,7 @@ def require(module: str, extra: str, what: str) -> Any:
         return importlib.import_module(module)
     except ImportError:
         raise MissingExtraError(f"{what} needs the package {module}, which is not installed: "
-                                f"pip install 'singmesh[{extra}]'", name=module) from None
+                                f"pip install 'singmesh[{extra}]'") from None
 
 
 def to_trimesh(mesh) -> Any:

@@ -1,4 +1,4 @@
-"""Headless pictures of meshes for the gallery (matplotlib, Agg backend).
+"""Headless pictures of meshes (matplotlib, Agg backend): the gallery's and the sweep's.
 
 The picture is drawn with our own orthographic projection and one 2-D
 ``PolyCollection`` sorted back to front (painter's algorithm) rather than
@@ -12,7 +12,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
-import matplotlib
+from .extras import require
+
+# Without matplotlib, importing this module says which extra to install.
+require("drawing pictures", ["matplotlib"])
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")  # headless: no display on the build machines
 
