@@ -127,7 +127,8 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
-                           steady=steady if steady.any() else None, turns=turns)
+                           steady=steady if steady.any() else None, turns=turns,
+                           stub=tol.CURVE_RAIL_STUB * cell)
 
 
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
@@ -352,7 +353,7 @@ def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = No
 def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray, curve_points: np.ndarray,
                     curve_edges: np.ndarray, curve_keys: np.ndarray, box_ends: np.ndarray, reach: float,
                     box: np.ndarray | None = None, steady: np.ndarray | None = None,
-                    turns: np.ndarray | None = None):
+                    turns: np.ndarray | None = None, stub: float | None = None):
     """Triangles zipping each rail to the curve.
 
     Parameters
@@ -376,6 +377,10 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         Curve vertices near which a rail may turn back along the curve
         (pinch points): its steps back there are not taken for zigzags
         (:func:`_no_zigzags`).
+    stub : float, optional
+        Rails with both ends on one face of the box, this close together,
+        are pieces of a longer rail that ran along the face: each is joined
+        to the nearest rail end on that face (:func:`_join_stubs`).
 
     Returns
     -------
@@ -393,6 +398,8 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     end_tree = cKDTree(curve_points[box_ends]) if len(box_ends) else None
     if box is not None:
         rail_list = _chain_on_faces(rail_list, event_points, curve_points[box_ends], reach, box)
+        if stub is not None:
+            rail_list = _join_stubs(rail_list, event_points, box, stub)
     tris: list[tuple] = []  # (vertex, vertex, vertex); vertex = ("e", event) or ("c", curve vertex)
 
     def walk(u: int, v: int) -> list[int]:
@@ -583,6 +590,57 @@ def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach
                 d = float(np.linalg.norm(pa - pb))
                 if d <= reach:
                     pairs.append((d, a, b))
+    return _assemble_chains(rail_list, pairs)
+
+
+def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float):
+    """Short rails with both ends on one face of the box, each joined to the nearest rail end there.
+
+    Where the tube reaches a face of the box near a curve's end, a
+    half-sheet's trace on the tube's side can run along the face (no
+    rail there) and come back for a few links: a stub, both of whose ends
+    are on the box.  Zipped alone, both its ends are fanned to the curve's
+    end, in opposite senses, and the half-sheet's strip is made twice.
+    In turn, each stub continues the rail (not a stub) whose end on the
+    same face is nearest its start, or goes before the one whose start is
+    nearest its end, within ``gap``: the two become one, and the next stub
+    sees the joined rail's ends.
+    """
+    open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
+    stubs = []
+    for k in open_:
+        a, b = event_points[rail_list[k][0][0]], event_points[rail_list[k][0][-1]]
+        if (_faces_of(a, box) & _faces_of(b, box)).any() and float(np.linalg.norm(a - b)) <= gap:
+            stubs.append(k)
+    if not stubs:
+        return rail_list
+    rails_ = [(np.asarray(ev), closed) for ev, closed in rail_list]
+    gone = set()
+    for k in stubs:
+        ev = rails_[k][0]
+        start, end = event_points[ev[0]], event_points[ev[-1]]
+        best = None
+        for j in open_:
+            if j == k or j in gone or j in stubs:
+                continue
+            other = rails_[j][0]
+            # (distance, rail, whether the stub goes after it)
+            for p, q, after in ((event_points[other[-1]], start, True), (event_points[other[0]], end, False)):
+                if (_faces_of(p, box) & _faces_of(q, box)).any():
+                    d = float(np.linalg.norm(p - q))
+                    if d <= gap and (best is None or (d, j) < best[:2]):
+                        best = (d, j, after)
+        if best is None:
+            continue
+        _, j, after = best
+        other = rails_[j][0]
+        rails_[j] = (np.concatenate([other, ev]) if after else np.concatenate([ev, other]), False)
+        gone.add(k)
+    return [r for k, r in enumerate(rails_) if k not in gone]
+
+
+def _assemble_chains(rail_list, pairs):
+    """Rails joined end to start along ``pairs`` (distance, a, b), nearest first: rail b continues rail a."""
     nxt: dict[int, int] = {}
     taken = set()
     for _, a, b in sorted(pairs):
@@ -593,12 +651,12 @@ def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach
         return rail_list
     out = [rail_list[k] for k in range(len(rail_list)) if k not in nxt and k not in taken]
     done = set()
+    prev = {b: a for a, b in nxt.items()}
     for k in sorted(set(nxt) | taken):
         if k in done:
             continue
         # Walk back to the first rail of the chain (or once round a loop).
         first = k
-        prev = {b: a for a, b in nxt.items()}
         while first in prev and prev[first] != k:
             first = prev[first]
         chain, cur = [], first

@@ -483,6 +483,17 @@ CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
 #: tried (cells), the Newton steps onto the polar curve at each, and the
 #: widest tube (cells).
 CURVE_BRANCH_GAP = 1.5
+#: Two sheets crossing at a small angle (A1) get the wide tube where,
+#: as a whole piece, they are closer than CURVE_BRANCH_GAP cells out to
+#: more than this many cells: the usual tube's reach (CURVE_TUBE_RADIUS +
+#: CURVE_TUBE_GROW).  Sheets at 10 degrees are 1.5 cells apart 8.6 cells out.
+CURVE_CROSSING_RADIUS = 5.5
+
+#: A rail with both ends on one face of the box at most this many cells
+#: apart is a stub of a half-sheet's trace that ran along the face
+#: (facets.tubes._join_stubs); it is joined to the nearest rail end there,
+#: at most as far.
+CURVE_RAIL_STUB = 3.0
 CURVE_BRANCH_RADII = (2, 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24)
 CURVE_POLAR_NEWTON = 4
 CURVE_TANGENT_MAX = 24.0

@@ -1031,11 +1031,21 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     if len(meets):
         d = np.abs(curves.points[:, None, :] - meets[None]).max(axis=2).min(axis=1)
         in_meet_ball = d <= tol.CURVE_MEET_BALL * step
+    cross = crossing_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
     for c in curves.pieces:
         # A piece as a whole: its median (where a cusp degenerates at a
         # special point, the balls around it widen the tube).  The tacnode
         # edge (two tangent sheets) is wide however measured.
         r = float(np.median(reach[c.vertices]))
+        if c.type.startswith("A1") and c.sheets >= 2:
+            # Two sheets crossing at a small angle, as a whole piece (near a
+            # pinch point the angle goes to 0 on a piece that is wide apart
+            # elsewhere: the ball round the point is for that).
+            rc = float(np.median(cross[c.vertices]))
+            if rc > tol.CURVE_CROSSING_RADIUS:
+                v_wide[c.vertices] = True
+                need[c.vertices] = rc
+            continue
         tacnode = c.sheets >= 2 and not c.type.startswith(("A1", "D4"))
         if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
             v_wide[c.vertices] = True
@@ -1052,6 +1062,28 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     curves.wide = wide
     curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
     return curves
+
+
+def crossing_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:
+    """Distance (cells) from each curve point at which two crossing sheets are ``CURVE_BRANCH_GAP`` cells apart.
+
+    Where the Hessian in the normal plane is indefinite, with eigenvalues
+    big > 0 > -small, the branches are the lines u = +-sqrt(small / big) v
+    to first order: 2 r sqrt(small / big) apart at r along the bisector v.
+    0 where the Hessian is definite or of rank < 2; at most
+    ``CURVE_TANGENT_MAX``.
+    """
+    out = np.zeros(len(points))
+    if len(points) == 0:
+        return out
+    N = _normal_plane(tangents)
+    lam = np.linalg.eigvalsh(np.einsum("kia,kij,kjb->kab", N, surface.hessian(points), N))
+    a = np.abs(lam)
+    small, big = a.min(axis=1), a.max(axis=1)
+    crossing = (lam[:, 0] * lam[:, 1] < 0) & (small > tol.CURVE_RANK_RTOL * big)
+    out[crossing] = np.minimum(tol.CURVE_BRANCH_GAP / (2.0 * np.sqrt(small[crossing] / big[crossing])),
+                               tol.CURVE_TANGENT_MAX)
+    return out
 
 
 def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:

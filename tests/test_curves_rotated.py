@@ -149,3 +149,38 @@ def test_roman_surface_rails_zip_each_curve_edge_once_per_half_sheet():
     counts = mc.edge_counts(m.faces)
     assert max(counts.values()) <= 6, sorted(counts.values())[-6:]
     assert all(n % 2 == 0 for n in counts.values() if n > 2)
+
+
+@pytest.mark.parametrize("degrees, seed", [(7, 3), (5, 2), (8, 4), (4, 17)])
+def test_planes_crossing_at_a_small_angle(degrees, seed):
+    # Two sheets crossing at a few degrees are less than a cell apart for
+    # many cells along the bisector (2 r tan(angle / 2) at r): a tube of
+    # the usual width left them in one leaf, and strips jumped between
+    # them (27 curve edges with other than 4 triangles at 7 degrees, 19
+    # pieces at 5).  With the wide tube reaching a face of the box near
+    # the curve's end (seeds 4 and 17), a half-sheet's trace on the tube
+    # ran along the face and came back as a stub of a few links, whose
+    # two ends were both fanned to the curve's end: a strip made twice
+    # (edges of 6 triangles) or with a gap (open edges).
+    s = np.tan(np.radians(degrees))
+    check_curve_mesh(float_rotated(f"z (z - {s:.15g} x)", seed), BOX1, 1, half_sheets=4)
+
+
+def test_large_sphere_cut_by_a_plane_at_a_small_angle():
+    # A sphere of radius 6 meets z = 0 at 7 degrees along a circle of
+    # radius 0.73: the cap between them is 5 cells high at the default
+    # fine level.
+    t = np.radians(7.0)
+    text = float_rotated(f"(x^2 + y^2 + (z + {6 * np.cos(t):.15g})^2 - 36) z", 5)
+    check_curve_mesh(text, BOX1, 1, half_sheets=4)
+
+
+@pytest.mark.parametrize("box", [BOX1, ((-1.03, 0.97), (-0.98, 1.01), (-1.011, 0.993))])
+def test_plane_tangent_to_a_hyperboloid_along_two_lines(box):
+    # The tangent plane of a hyperboloid of one sheet at (1/2, 1/2, -1/2)
+    # cuts it in the two rulings through the point; the angle between the
+    # sheets grows from 0 at the point along each line.  The point is on
+    # split planes of the first box (10 open edges there, around it), in
+    # general position in the second (a piece cut off, 19 curve edges
+    # with other than 4 triangles).
+    check_curve_mesh("(x + y + z - 1/2) (x^2 + y^2 - z^2 - 1/4)", box, 1)
