@@ -149,7 +149,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve
         as the octree grows, level by level, before the boxes are made.
         ``Mesh.stats["memory_estimate"]``: the largest estimate seen.
     **params
-        Values of named parameters of the equation.
+        Values of named parameters of the equation; one it does not use
+        is refused (SurfaceError), as a misspelt name would be.
 
     Returns
     -------
