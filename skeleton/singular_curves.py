@@ -482,6 +482,12 @@ def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: floa
         if len(near) < 3:
             continue
         t0 = _principal(near)
+        # The sample met only a sample's residual (_limit): as the trace's
+        # first vertex it is corrected to a vertex's, as every other one
+        # is (it stayed ~1e-6 of the box off the curve, fuzz s1-72).
+        z, ok = _correct_vertex(surface, x0[None], t0[None], h)
+        if ok[0]:
+            x0 = z[0]
         fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
         back, how_b = ([], "closed") if how_f == "closed" else \
             _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
