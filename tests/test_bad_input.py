@@ -352,3 +352,23 @@ def test_cli_output_closed_early_is_no_traceback(tmp_path):
     assert p.wait(timeout=120) == 0, err
     assert "Traceback" not in err and "Error" not in err, err
     assert out.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("text, point", [
+    ("x^2 - 1e-20", (0.0, 0.0, 0.0)),                                  # planes x = +-1e-10
+    ("0.36*x^2 + 0.48*x*y + 0.16*y^2 - 1e-22", (0.0, 0.0, 0.0)),       # planes 0.6 x + 0.4 y = +-1e-11
+])
+def test_sheets_closer_than_doubles_resolve_are_no_silent_empty_mesh(text, point):
+    # F changes sign (sympy, exactly: F < 0 at the point, F > 0 at (1, 1, 1)),
+    # but its two sheets are closer than double precision resolves: the
+    # empty mesh came without a warning and with the note "F has no real
+    # zero in this box".
+    import sympy as sp
+
+    x, y, z = sp.symbols("x y z")
+    exact = sp.sympify(text.replace("^", "**"), rational=True)
+    assert exact.subs({x: point[0], y: point[1], z: point[2]}) < 0 < exact.subs({x: 1, y: 1, z: 1})
+    with pytest.warns(singmesh.EmptyMeshWarning, match="not resolved"):
+        m = singmesh.mesh(text, ((-1.0, 1.0),) * 3, coarse=8, fine=32)
+    assert len(m.faces) == 0
+    assert not any("no real zero" in note for note in m.notes())
