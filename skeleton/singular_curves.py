@@ -1384,6 +1384,15 @@ def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list,
     if pinch.any():
         rows = np.nonzero(pinch)[0]
         out[rows] = on_curve(rows, (lo[rows] + hi[rows]) / 2)
+    # Next to a degenerate point of the locus Newton converges slowly and
+    # stops with a residual below the vertex's limit (relative: F and grad F
+    # are tiny there) but the point 1.7e-6 off the curve (fuzz s1-72, a
+    # pinch point): a second round from there goes on to the curve.
+    finite = np.isfinite(out).all(axis=1)
+    if finite.any():
+        rows = np.nonzero(finite)[0]
+        y, good = _correct(surface, out[rows], t[rows], step, each=True, limit=_vertex_limit(surface))
+        out[rows] = np.where(good[:, None], y, out[rows])
     # Each point is a vertex of the curve, so it must be on it to rounding:
     # where Newton cannot put it there (next to a point where the locus is
     # itself singular, as the swallowtail point), the nearer of a and b
