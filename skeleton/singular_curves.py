@@ -703,7 +703,14 @@ def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.nda
             return np.inf
         return _degeneracy(surface, y, True) if rank1 else _second_singular_value(surface, y)
 
-    return point(_golden(measure, -2.0 * h, 2.0 * h, tol.CURVE_CROSSING_STEPS))
+    x = point(_golden(measure, -2.0 * h, 2.0 * h, tol.CURVE_CROSSING_STEPS))
+    # Where Newton left the point off the locus (two branches of a curve
+    # passing within a step without crossing: fuzz s1-638, a "crossing"
+    # 0.025 off F = 0), the vertex of the trace there, on the curve, is
+    # the crossing instead.
+    if not (np.isfinite(x).all() and residual(surface, x[None])[0] <= _vertex_limit(surface)):
+        return p[i].copy()
+    return x
 
 
 def _graph(polylines: list, surface: Surface, h: float):

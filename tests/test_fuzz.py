@@ -55,6 +55,12 @@ REGRESSIONS = [
     # (skeleton/singular_curves.py _type_changes).
     ("s1-72 pinch point on the curve", "7*x*y*z^4 + 1/2*x^3*y*z^2 + 1*x^4*z^2 - 3/8*x^5*z - 1/3*x^5 - 8*y^3*z",
      ((-2.0, 2.0), (-1.0, 1.0), (-0.5, 0.5)), 8, 64),
+    # Two branches of the double curve within a step of each other were
+    # merged at a "crossing" Newton left 0.025 off F = 0, 0.0062 of the
+    # box by |F| / |grad F| (skeleton/singular_curves.py _crossing_point).
+    ("s1-638 crossing off the curve",
+     "(0.50443749619891*y*z - 2.75237021685692*x*y - 2.2279695506216*x^2 - 2.3657511302834*x + 0.129930238689852)"
+     "*(1*z^2 + 4/3*y*z + 1/3*x)", ((-0.5, 0.5), (-1.0, 1.0), (-2.0, 2.0)), 8, 64),
 ]
 
 
