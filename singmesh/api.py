@@ -31,7 +31,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 from . import tolerances as tol
 from .errors import SurfaceError
 from .memory import Budget, parse_size
-from .mesh import CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
+from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
 
@@ -149,7 +149,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve
         as the octree grows, level by level, before the boxes are made.
         ``Mesh.stats["memory_estimate"]``: the largest estimate seen.
     **params
-        Values of named parameters of the equation.
+        Values of named parameters of the equation; one it does not use
+        is refused (SurfaceError), as a misspelt name would be.
 
     Returns
     -------
@@ -370,6 +371,10 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         warnings.warn(note, CreaseWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
+    elif len(faces) == 0 and (overflow or any(c.half_sheets for c in curve_list)):
+        # Not silent either: only "curves" traced in a plane of singular
+        # points came out (x^2 - 1e-20), curves with sheets and no sheet.
+        warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
 
 

@@ -406,6 +406,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"singmesh: warning: {message}", file=sys.stderr)
 
     warnings.showwarning = one_line
+    stdout, sys.stdout = sys.stdout, _QuietPipe(sys.stdout)
     try:
         return COMMANDS[argv[0]](argv[1:])
     except SurfaceError as exc:
@@ -414,6 +415,50 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print("singmesh: error: out of memory (lower --fine or --coarse, or see --max-memory)", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout = stdout
+
+
+class _QuietPipe:
+    """Standard output that a reader closing it early (``singmesh mesh ... | head``) does not stop.
+
+    The rest of the output goes to the null device, quietly: the command
+    still does its work (writes its mesh file) and exits with its own
+    status, where a bare ``print`` would end in a BrokenPipeError traceback.
+    """
+
+    def __init__(self, stream):
+        self._stream = stream
+        self._closed = False
+
+    def write(self, text: str) -> int:
+        if not self._closed:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._drop()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self._closed:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._drop()
+
+    def _drop(self) -> None:
+        self._closed = True
+        try:
+            # What is still buffered goes to the null device when Python
+            # flushes the stream at exit, not to the closed pipe.
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self._stream.fileno())
+            os.close(null)
+        except (OSError, ValueError, AttributeError):
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 if __name__ == "__main__":  # pragma: no cover

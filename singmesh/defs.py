@@ -114,7 +114,9 @@ class Definition:
                                f"not an implicit surface ({IMPLICIT_SURFACE!r})")
         values = {**self.parameters, **params}
         try:
-            return Surface.parse(self.equation, **values)
+            # The file's own parameters may go unused (and be given values:
+            # the gallery passes them all); others the caller gives may not.
+            return Surface._parse(self.equation, values, optional=frozenset(self.parameters))
         except SurfaceError as exc:
             raise self._located(exc) from None
 

@@ -96,6 +96,14 @@ class EmptyMeshWarning(UserWarning):
     """The mesh has no triangle: the surface does not meet the box (the warning says why)."""
 
 
+#: Why a mesh with a locus of singular points it could not trace is empty:
+#: F and grad F are zero to rounding on more than curves (x^2 - 1e-20: two
+#: planes 2e-10 apart, nearly a double plane), so no sign change is seen.
+UNRESOLVED_EMPTY = ("no triangle: F and grad F vanish to rounding on more than points and curves here "
+                    "(sheets closer than double precision resolves, or a repeated factor written with "
+                    "rounded coefficients): F = 0 is not resolved")
+
+
 def unit_normals(g: np.ndarray) -> np.ndarray:
     """Rows of ``g`` (grad F at vertices) scaled to unit length.
 
@@ -417,8 +425,10 @@ class Mesh:
             out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "
                        "type has half-sheets (the mesh is not right there)")
         if len(self.faces) == 0:
-            if self.singularities:
-                out.append("no triangle: in this box the real surface is only isolated point(s)")
+            if self.stats.get("untraced_curve") or any(c.half_sheets for c in self.singular_curves):
+                out.append(UNRESOLVED_EMPTY)
+            elif self.singularities or self.singular_curves:
+                out.append("no triangle: in this box the real surface is only isolated point(s) and line(s)")
             else:
                 out.append("no triangle: F has no real zero in this box")
         return out

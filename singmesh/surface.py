@@ -37,7 +37,7 @@ from singmesh.skeleton.splitting import compose
 
 from .errors import SurfaceError
 from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
-from .syntax import VARIABLES, X, Y, Z, read_equation  # noqa: F401  (X, Y, Z re-exported)
+from .syntax import VARIABLES, X, Y, Z, read_equation, unused_message  # noqa: F401  (X, Y, Z re-exported)
 from .tolerances import CANDIDATE_DUST, MAX_DEGREE, MAX_POWER, ZERO_ULPS
 
 #: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
@@ -186,19 +186,25 @@ class Surface(abc.ABC):
         Raises
         ------
         SurfaceError
-            If the input is not a usable function of x, y, z.
+            If the input is not a usable function of x, y, z, or a
+            parameter is given that it does not use.
         """
+        return cls._parse(source, params)
+
+    @classmethod
+    def _parse(cls, source, params: dict, optional=frozenset()) -> "Surface":
+        """:meth:`parse`, where the names in ``optional`` may go unused (a definition file's parameters)."""
         if isinstance(source, Surface):
             if not params:
                 return source
             source = source.expr
         if isinstance(source, sympy.Basic):
             text = str(source)
-            expr, values = _substitute(sympy.sympify(source), params)
+            expr, values = _substitute(sympy.sympify(source), params, optional)
             rounding = max([0.0] + [2.0 ** -f._prec for f in expr.atoms(sympy.Float)])
         elif isinstance(source, str):
             text = source
-            equation = read_equation(source, params)
+            equation = read_equation(source, params, optional)
             expr, values, rounding = equation.expr, equation.values, equation.rounding
         else:
             raise SurfaceError(
@@ -757,13 +763,19 @@ def _to_float(c: sympy.Expr, monom) -> float:
         raise SurfaceError(f"the coefficient of {term} is not real: {c}")
     if not np.isfinite(value.real):
         raise SurfaceError(f"the coefficient of {term} is out of the range of double precision: {sympy.N(c, 4)}")
+    if value.real == 0 and c != 0:
+        # Read as 0 the term would be dropped without a word: x^2 - 1e-400
+        # would mesh x^2 (a double plane, no sign change: an empty mesh).
+        raise SurfaceError(f"the coefficient of {term} is below the range of double precision "
+                           f"(it would be read as 0): {sympy.N(c, 4)}; scale the equation or leave the term out")
     return float(value.real)
 
 
-def _substitute(expr: sympy.Expr, params: Mapping) -> tuple[sympy.Expr, dict]:
+def _substitute(expr: sympy.Expr, params: Mapping, optional=frozenset()) -> tuple[sympy.Expr, dict]:
     """A user's sympy expression with x, y, z and ``params`` identified by name.
 
     Symbols may come with other assumptions than ours (``sympy.symbols('x')``).
+    A parameter the expression does not have is refused, unless in ``optional``.
     """
     if not isinstance(expr, sympy.Expr):
         raise SurfaceError(f"{expr} is not an algebraic expression")
@@ -776,6 +788,10 @@ def _substitute(expr: sympy.Expr, params: Mapping) -> tuple[sympy.Expr, dict]:
         if not isinstance(v, sympy.Expr) or v.free_symbols:
             raise SurfaceError(f"parameter {name} = {value!r} is not a number")
         values[name] = v
+    names = {sym.name for sym in expr.free_symbols}
+    unused = sorted(n for n in values if n not in names and n not in optional)
+    if unused:
+        raise SurfaceError(unused_message(unused, sorted(names - {"x", "y", "z"})))
     subs = {}
     for sym in expr.free_symbols:
         if sym.name in ("x", "y", "z"):

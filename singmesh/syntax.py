@@ -473,7 +473,7 @@ def _name_statements(text: str, definitions: list[Statement]) -> dict[str, State
     return by_name
 
 
-def read_equation(text: str, params: dict | None = None) -> Equation:
+def read_equation(text: str, params: dict | None = None, optional=frozenset()) -> Equation:
     """Read an equation text with its definitions; ``params`` override them.
 
     Parameters
@@ -484,12 +484,17 @@ def read_equation(text: str, params: dict | None = None) -> Equation:
         Values by name (numbers, sympy expressions, or text in the same
         language, which may use other names).  They replace definitions
         of the same name, or give names the text uses without defining.
+    optional : set of str
+        Names of ``params`` the equation need not use (a definition
+        file's own parameters); any other parameter it does not use is
+        refused.
 
     Raises
     ------
     SurfaceError
         Syntax errors, unknown symbols, definitions in a cycle, parameters
-        that are not finite real numbers; located by line and column.
+        that are not finite real numbers, parameters the equation does not
+        use; located by line and column.
     """
     params = dict(params or {})
     if not text.strip():
@@ -513,6 +518,7 @@ def read_equation(text: str, params: dict | None = None) -> Equation:
         expr, uses = parse_expression(text, st.tokens, names)
         defined[name] = (expr, uses, f"{name}", st.name_pos)
     expr, uses = parse_equation(text, surface.tokens, names)
+    _check_used(params, uses, defined, optional)
 
     order = _dependency_order(text, defined)
     resolved: dict[str, sympy.Expr] = {}
@@ -532,6 +538,31 @@ def read_equation(text: str, params: dict | None = None) -> Equation:
     rounding = max([literal_rounding(tokens)] + [_value_rounding(v) for v in params.values()])
     return Equation(expr=expr, values=values, definitions={n: d[0] for n, d in defined.items()},
                     rounding=rounding)
+
+
+def _check_used(params: dict, uses, defined: dict, optional) -> None:
+    """Refuse a parameter that neither the equation nor a definition it uses needs.
+
+    A value given for nothing is most likely a misspelt name or the wrong
+    equation: said, not silently ignored.
+    """
+    reached, todo = set(), list(uses)
+    while todo:
+        name = todo.pop()
+        if name not in reached:
+            reached.add(name)
+            todo.extend(defined[name][1] if name in defined else ())
+    unused = sorted(n for n in params if n not in reached and n not in optional)
+    if unused:
+        used = sorted(n for n in reached if n in defined)
+        raise SurfaceError(unused_message(unused, used))
+
+
+def unused_message(unused: list[str], used: list[str]) -> str:
+    """The one line refusing the parameters ``unused``; ``used`` are those the equation has."""
+    has = f"its parameters are {', '.join(used)}" if used else "it has none"
+    return (f"parameter{'s' if len(unused) > 1 else ''} {', '.join(unused)} "
+            f"{'are' if len(unused) > 1 else 'is'} not used by the equation ({has})")
 
 
 def literal_rounding(tokens: list[Token]) -> float:

@@ -347,7 +347,7 @@ def _as_point(point) -> np.ndarray:
     if p.shape != (3,):
         raise SurfaceError(f"a point is three numbers, got {p.size}")
     if not np.all(np.isfinite(p)):
-        raise SurfaceError(f"the point {tuple(p)} is not finite")
+        raise SurfaceError(f"the point ({', '.join(f'{c:g}' for c in p)}) is not finite")
     return p
 
 
@@ -654,11 +654,18 @@ def classify_command(args: list[str]) -> int:
     # argparse takes "-1/2" for an option (only plain negative decimals are
     # recognised as numbers); a leading space keeps the three values after
     # --at positional, and _coordinate strips it again.
+    after_at = set()
     for i, arg in enumerate(args):
         if arg == "--at":
             for j in range(i + 1, min(i + 4, len(args))):
+                after_at.add(j)
                 if re.match(r"^-[\d.]", args[j]):
                     args[j] = " " + args[j]
+    # So is an equation starting with a minus ("-x^2 + y^2 - z^2", as
+    # ``singmesh mesh`` takes it): only -h and --options are options here.
+    for i, arg in enumerate(args):
+        if i not in after_at and re.match(r"^-[^-\s]", arg) and arg != "-h":
+            args[i] = " " + arg
     try:
         ns = parser.parse_intermixed_args(args)
     except _ArgumentError as exc:
@@ -668,6 +675,7 @@ def classify_command(args: list[str]) -> int:
         return int(exc.code or 0)
     params = {}
     for item in ns.params:
+        item = item.strip()  # (the space put before a leading minus above)
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
             print(f"{prog}: error: a parameter is given as name=value, not {item!r}",
@@ -675,7 +683,7 @@ def classify_command(args: list[str]) -> int:
             return 2
         params[name.strip()] = value.strip()
     try:
-        surface = Surface.parse(ns.equation, **params)
+        surface = Surface.parse(ns.equation.strip(), **params)
         for point in ns.at:
             print(classify(surface, point).describe())
     except SurfaceError as exc:

@@ -482,6 +482,12 @@ def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: floa
         if len(near) < 3:
             continue
         t0 = _principal(near)
+        # The sample met only a sample's residual (_limit): as the trace's
+        # first vertex it is corrected to a vertex's, as every other one
+        # is (it stayed ~1e-6 of the box off the curve, fuzz s1-72).
+        z, ok = _correct_vertex(surface, x0[None], t0[None], h)
+        if ok[0]:
+            x0 = z[0]
         fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
         back, how_b = ([], "closed") if how_f == "closed" else \
             _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
@@ -697,7 +703,14 @@ def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.nda
             return np.inf
         return _degeneracy(surface, y, True) if rank1 else _second_singular_value(surface, y)
 
-    return point(_golden(measure, -2.0 * h, 2.0 * h, tol.CURVE_CROSSING_STEPS))
+    x = point(_golden(measure, -2.0 * h, 2.0 * h, tol.CURVE_CROSSING_STEPS))
+    # Where Newton left the point off the locus (two branches of a curve
+    # passing within a step without crossing: fuzz s1-638, a "crossing"
+    # 0.025 off F = 0), the vertex of the trace there, on the curve, is
+    # the crossing instead.
+    if not (np.isfinite(x).all() and residual(surface, x[None])[0] <= _vertex_limit(surface)):
+        return p[i].copy()
+    return x
 
 
 def _graph(polylines: list, surface: Surface, h: float):
@@ -1410,6 +1423,15 @@ def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list,
     if pinch.any():
         rows = np.nonzero(pinch)[0]
         out[rows] = on_curve(rows, (lo[rows] + hi[rows]) / 2)
+    # Next to a degenerate point of the locus Newton converges slowly and
+    # stops with a residual below the vertex's limit (relative: F and grad F
+    # are tiny there) but the point 1.7e-6 off the curve (fuzz s1-72, a
+    # pinch point): a second round from there goes on to the curve.
+    finite = np.isfinite(out).all(axis=1)
+    if finite.any():
+        rows = np.nonzero(finite)[0]
+        y, good = _correct(surface, out[rows], t[rows], step, each=True, limit=_vertex_limit(surface))
+        out[rows] = np.where(good[:, None], y, out[rows])
     # Each point is a vertex of the curve, so it must be on it to rounding:
     # where Newton cannot put it there (next to a point where the locus is
     # itself singular, as the swallowtail point), the nearer of a and b

@@ -84,6 +84,11 @@ CASES = [
     ("infinity in the equation", ("x^2 + oo y", B, {}), ["x^2 + oo y"], "NaN or infinite"),
     ("coefficient over doubles", ("x^2 - 1e400", B, {}), ["x^2 - 1e400"], "out of the range of double"),
     ("number power over doubles", ("x^2 - 10^100000", B, {}), ["x^2 - 10^100000"], "out of the range of double"),
+    # 1e-400 read as 0 left x^2: no sign change, a silent empty mesh.
+    ("coefficient under doubles", ("x^2 - 1e-400", B, {}), ["x^2 - 1e-400"],
+     "coefficient of x.0 y.0 z.0 is below the range of double precision"),
+    ("number power under doubles", ("y + x^2 10^-400", B, {}), ["y + x^2 10^-400"],
+     "coefficient of x.2 y.0 z.0 is below the range of double precision"),
     ("nan parameter", ("x^2 + y^2 - a", B, {"a": float("nan")}), ["x^2 + y^2 - a", "a=nan"],
      "not a finite real number"),
     ("nan in the box", (SPHERE, ((np.nan, 1), (-1, 1), (-1, 1)), {}), [SPHERE, *_box("nan", 1, -1, 1, -1, 1)],
@@ -160,6 +165,12 @@ CASES = [
     ("defs definition not closed", None, ["--defs", "{open}", "--name", "Open"], "not closed"),
     ("defs without name", None, ["--defs", "{defs}"], "--defs needs --name"),
     ("defs parameter twice", None, ["--defs", "{defs}", "--name", "Sphere", "s=1", "s=2"], "given twice"),
+    # A value given for nothing (a misspelt name, the wrong equation) was
+    # ignored without a word.
+    ("unused parameter", (SPHERE, B, {"b": 1}), [SPHERE, "b=1"], r"parameter b is not used by the equation \(it has none\)"),
+    ("misspelt parameter", ("x^2 + y^2 - a z", B, {"a": 1, "aa": 2}), ["x^2 + y^2 - a z", "a=1", "aa=2"],
+     r"parameter aa is not used by the equation \(its parameters are a\)"),
+    ("defs parameter unused", None, ["--defs", "{defs}", "--name", "Sphere", "s=1"], "parameter s is not used"),
 ]
 
 
@@ -291,7 +302,7 @@ def test_cli_subprocess_one_line_no_traceback(args, words, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("args", [["-x^2-y^2+z^2+1"], ["--coarse", "8", "-x^2-y^2+z^2+1", "a=1"]])
+@pytest.mark.parametrize("args", [["-x^2-y^2+z^2+1"], ["--coarse", "8", "-x^2-y^2+z^2+a", "a=1"]])
 def test_cli_equation_with_a_leading_minus_is_not_an_option(args, tmp_path, capsys):
     # argparse takes any word starting with '-' for an option: the equation
     # "-x^2-y^2+z^2+1" (a hyperboloid of one sheet) is meshed, not refused.
@@ -302,3 +313,62 @@ def test_cli_equation_with_a_leading_minus_is_not_an_option(args, tmp_path, caps
     assert status == 0, captured.err
     assert "-x**2 - y**2 + z**2 + 1" in captured.out
     assert out.stat().st_size > 1000
+
+
+def test_unused_parameters_of_a_definition_file_are_no_error(tmp_path):
+    # A SingSurf file may declare parameters its equation does not use: only
+    # the caller's own unused values are refused.
+    from singmesh.defs import find_definition, read_definitions
+
+    path = tmp_path / "p.defs"
+    path.write_text('<definition name="Plane" type="asurf">\nx + a*y - 0.25;\n'
+                    '<parameter name="a" value="0.5" />\n<parameter name="b" value="2" />\n</definition>\n')
+    d = find_definition(read_definitions(path), "Plane")
+    assert float(d.surface()(np.array([0.25, 0.0, 0.0]))) == 0.0
+    assert float(d.surface(a=1)(np.array([0.0, 0.25, 0.0]))) == 0.0
+    assert float(d.surface(a=1, b=3)(np.array([0.0, 0.25, 0.0]))) == 0.0  # b: declared by the file
+    with pytest.raises(SurfaceError, match="parameter c is not used"):
+        d.surface(c=1)
+
+
+def test_unused_parameter_with_a_sympy_expression():
+    import sympy as sp
+
+    x, y, z, a = sp.symbols("x y z a")
+    with pytest.raises(SurfaceError, match=r"parameter b is not used by the equation \(its parameters are a\)"):
+        singmesh.Surface.parse(x**2 + y**2 - a * z, a=1, b=2)
+    s = singmesh.Surface.parse(x**2 + y**2 - a * z, a=0.5)
+    assert float(s(np.array([1.0, 0.0, 2.0]))) == 0.0
+
+
+def test_cli_output_closed_early_is_no_traceback(tmp_path):
+    # singmesh mesh ... | head: the reader has gone before the report is
+    # printed; the mesh file is still written and no traceback follows.
+    out = tmp_path / "s.ply"
+    p = subprocess.Popen([sys.executable, "-m", "singmesh.cli", "mesh", SPHERE, *SMALL_CLI, "-o", str(out)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 0, err
+    assert "Traceback" not in err and "Error" not in err, err
+    assert out.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("text, point", [
+    ("x^2 - 1e-20", (0.0, 0.0, 0.0)),                                  # planes x = +-1e-10
+    ("0.36*x^2 + 0.48*x*y + 0.16*y^2 - 1e-22", (0.0, 0.0, 0.0)),       # planes 0.6 x + 0.4 y = +-1e-11
+])
+def test_sheets_closer_than_doubles_resolve_are_no_silent_empty_mesh(text, point):
+    # F changes sign (sympy, exactly: F < 0 at the point, F > 0 at (1, 1, 1)),
+    # but its two sheets are closer than double precision resolves: the
+    # empty mesh came without a warning and with the note "F has no real
+    # zero in this box".
+    import sympy as sp
+
+    x, y, z = sp.symbols("x y z")
+    exact = sp.sympify(text.replace("^", "**"), rational=True)
+    assert exact.subs({x: point[0], y: point[1], z: point[2]}) < 0 < exact.subs({x: 1, y: 1, z: 1})
+    with pytest.warns(singmesh.EmptyMeshWarning, match="not resolved"):
+        m = singmesh.mesh(text, ((-1.0, 1.0),) * 3, coarse=8, fine=32)
+    assert len(m.faces) == 0
+    assert not any("no real zero" in note for note in m.notes())

@@ -493,8 +493,19 @@ def test_classify_command_parameters(capsys):
     assert capsys.readouterr().out.startswith("E6+-")
 
 
+@pytest.mark.parametrize("args", [["-x^2+y^2-(z+1/2)^2", "--at", "0", "0", "-1/2"],
+                                  ["--at", "0", "0", "-1/2", "-x^2+y^2-a*(z+1/2)^2", "a=1"]])
+def test_classify_command_equation_with_a_leading_minus(capsys, args):
+    # argparse took "-x^2+..." (no spaces) for an unknown option ("the
+    # following arguments are required: equation"); singmesh mesh does not.
+    assert classify_command(args) == 0, capsys.readouterr().err
+    assert capsys.readouterr().out.startswith("A1-- (node) at (0, 0, -0.5)")
+
+
 @pytest.mark.parametrize("args,message", [
     (["x^2 + y^2 + z^2 - 1", "--at", "0", "0", "0"], "not a singular point"),
+    (["x^2 + y^2 - z^2", "--at", "0", "0", "0", "b=1"], "parameter b is not used"),
+    (["x^2 + y^2 - z^2", "--at", "0", "0", "0", "-b"], "name=value, not '-b'"),
     (["x^2 + y^2 + z^2 - 1", "--at", "1", "0", "0"], "grad"),
     (["x^2 + y^2 -", "--at", "0", "0", "0"], "syntax error"),
     (["x^2 + y^2", "--at", "0", "0"], "--at"),

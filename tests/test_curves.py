@@ -509,3 +509,25 @@ def test_curve_vertices_of_a_type_beyond_a_k_lie_on_the_curve(text, axis):
     assert len(P) >= 100
     assert np.median(off) <= 1e-8
     assert np.mean(off <= 1e-6) >= 0.99, np.sort(off)[-5:]
+
+
+@pytest.mark.parametrize("text, axis, box", [
+    # A trace starts at a sample of the locus, which had met only a
+    # sample's residual: as the curve's vertex it stayed 1.3e-7 off the
+    # axis, the only one of its 68 vertices (the judge's off-surface).
+    ("0.571428571428571 y^5 - 0.5 x^3 y^2 - 4.5 x^4 z", 2, BOX1),   # fuzz s1-220, 15-digit decimals
+    # The pinch point where the type changes near the degenerate origin:
+    # Newton stopped 1.7e-6 off the axis with a residual under the
+    # vertex's (relative, F and grad F tiny there) (fuzz s1-72).
+    ("7 x y z^4 + 0.5 x^3 y z^2 + x^4 z^2 - 0.375 x^5 z - 0.333333333333333 x^5 - 8 y^3 z", 2,
+     ((-2.0, 2.0), (-1.0, 1.0), (-0.5, 0.5))),
+])
+def test_every_curve_vertex_lies_on_the_curve_the_trace_start_too(text, axis, box):
+    m = mesh_quiet(text, box, coarse=8, fine=64)
+    P = m.vertices[np.concatenate([c.vertices for c in m.singular_curves])]
+    others = [v for i, v in enumerate((X, Y, Z)) if i != axis]
+    e = Surface.parse(text).expr
+    assert all(sympy.expand(q.subs({others[0]: 0, others[1]: 0})) == 0 for q in (e, e.diff(X), e.diff(Y), e.diff(Z)))
+    off = np.linalg.norm(np.delete(P, axis, axis=1), axis=1)
+    assert len(P) >= 15  # the axis in the box, a vertex a cell or less apart
+    assert off.max() <= 1e-9, np.sort(off)[-3:]

@@ -46,6 +46,21 @@ REGRESSIONS = [
     # curve vertices outside the box, one 1.7e-4 of the box off F = 0).  The
     # case keeps other failures: only "outside-box" is checked.
     ("s1-394 chord along the face", None, None, 8, 64),
+    # A trace's first vertex, a sample of the locus, met only a sample's
+    # residual: 8.3e-9 of the box off F = 0 (skeleton/singular_curves.py
+    # trace_curves).
+    ("s1-220 trace start on the curve", "4/7*y^5 - 1/2*x^3*y^2 - 9/2*x^4*z", ((-1.0, 1.0),) * 3, 8, 64),
+    # The pinch point next to the degenerate origin: Newton stopped with a
+    # residual under the vertex's but 2.1e-9 of the box off F = 0
+    # (skeleton/singular_curves.py _type_changes).
+    ("s1-72 pinch point on the curve", "7*x*y*z^4 + 1/2*x^3*y*z^2 + 1*x^4*z^2 - 3/8*x^5*z - 1/3*x^5 - 8*y^3*z",
+     ((-2.0, 2.0), (-1.0, 1.0), (-0.5, 0.5)), 8, 64),
+    # Two branches of the double curve within a step of each other were
+    # merged at a "crossing" Newton left 0.025 off F = 0, 0.0062 of the
+    # box by |F| / |grad F| (skeleton/singular_curves.py _crossing_point).
+    ("s1-638 crossing off the curve",
+     "(0.50443749619891*y*z - 2.75237021685692*x*y - 2.2279695506216*x^2 - 2.3657511302834*x + 0.129930238689852)"
+     "*(1*z^2 + 4/3*y*z + 1/3*x)", ((-0.5, 0.5), (-1.0, 1.0), (-2.0, 2.0)), 8, 64),
 ]
 
 
