@@ -35,6 +35,7 @@ from __future__ import annotations
 import argparse
 import datetime as _dt
 import json
+import os
 import platform
 import sys
 import time
@@ -216,8 +217,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)
+        # Written to before the entries are meshed, not after.
+        probe = out / f".gallery-probe-{os.getpid()}"
+        probe.open("wb").close()
+        probe.unlink()
     except OSError as exc:
-        print(f"gallery: error: cannot create {out}: {exc}", file=sys.stderr)
+        print(f"gallery: error: cannot write into {out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
 
     t0 = time.perf_counter()

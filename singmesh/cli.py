@@ -30,7 +30,13 @@ from .mesh import FORMATS, LINE_FORMATS
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one SurfaceError line (exit status 2), not usage text."""
 
+    #: Placeholders of :func:`_hide_leading_minus` and the words they hide,
+    #: put back into error messages.
+    hidden: dict[str, str] = {}
+
     def error(self, message: str):
+        for key, word in self.hidden.items():
+            message = message.replace(key, word)
         if len(message) > 200:  # an unrecognized 100 kB argument: one readable line
             message = message[:200] + "..."
         raise SurfaceError(f"{self.prog}: {message}")
@@ -179,7 +185,9 @@ def _mesh_command(argv: list[str]) -> int:
     argv, numbers = _take_box(argv)
     takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
     argv, hidden = _hide_leading_minus(argv, takes_value)
-    args = p.parse_args(argv)
+    p.hidden = hidden
+    # Intermixed: parameter values may follow the options (name=value at the end).
+    args = p.parse_intermixed_args(argv)
     args.args = [hidden.get(a, a) for a in args.args]
     box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
     if args.output:
@@ -266,7 +274,9 @@ def _sweep_command(argv: list[str]) -> int:
     argv, swept = _take_param(argv)
     takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
     argv, hidden = _hide_leading_minus(argv, takes_value)
-    args = p.parse_args(argv)
+    p.hidden = hidden
+    # Intermixed: parameter values may follow the options (name=value at the end).
+    args = p.parse_intermixed_args(argv)
     args.args = [hidden.get(a, a) for a in args.args]
     if swept is None:
         raise SurfaceError("give the parameter swept and its range: --param NAME LO HI")
@@ -296,8 +306,12 @@ def _sweep_command(argv: list[str]) -> int:
     if not args.quiet:
         print(result.table())
         for b in result.bifurcations:
-            print(f"change between {swept[0]} = {b['between'][0]:.6g} and {b['between'][1]:.6g}: "
-                  f"{_counts_text(b['before'], b['curves_before'])} -> {_counts_text(b['after'], b['curves_after'])}")
+            text = f"{_counts_text(b['forms_before'], b['curves_before'])} -> " \
+                   f"{_counts_text(b['forms_after'], b['curves_after'])}"
+            if b["euler_before"] != b["euler_after"] or b["components_before"] != b["components_after"]:
+                text += (f"; Euler characteristic {b['euler_before']} -> {b['euler_after']}, "
+                         f"components {b['components_before']} -> {b['components_after']}")
+            print(f"change between {swept[0]} = {b['between'][0]:.6g} and {b['between'][1]:.6g}: {text}")
         print(f"written              {result.folder / 'sweep.json'}")
         if result.animation is not None:
             print(f"animation            {result.animation}")

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import sys
 import tempfile
@@ -99,9 +100,16 @@ class SweepResult:
         return "\n".join(lines)
 
 
+#: The most frames a sweep takes: a mistyped count (1e8) is refused, not
+#: meshed until the memory runs out.
+MAX_FRAMES = 10_000
+
+
 def _values(lo: float, hi: float, frames: int) -> list[float]:
     if not (isinstance(frames, (int, np.integer)) and not isinstance(frames, bool) and frames >= 1):
         raise SurfaceError(f"the number of frames is a positive integer, not {frames!r}")
+    if frames > MAX_FRAMES:
+        raise SurfaceError(f"{frames} frames is more than a sweep takes (at most {MAX_FRAMES})")
     try:
         lo, hi = float(lo), float(hi)
     except (TypeError, ValueError):
@@ -124,7 +132,16 @@ def _check(surface, param: str, values: list[float], params: dict, box) -> np.nd
         raise SurfaceError(f"{param!r} is not a parameter name (x, y and z are the coordinates)")
     if param in params:
         raise SurfaceError(f"the parameter {param} is swept: it cannot also be given a value")
-    first = Surface.parse(surface, **params, **{param: values[0]})
+    try:
+        first = Surface.parse(surface, **params, **{param: values[0]})
+    except SurfaceError as exc:
+        # A misspelt --param: say so, not only which symbol was left unknown.
+        if isinstance(surface, str) and "unknown symbol" in str(exc) \
+                and not re.search(rf"(?<![A-Za-z0-9_]){re.escape(param)}(?![A-Za-z0-9_])", surface):
+            raise SurfaceError(f"the equation has no parameter {param}; {exc}") from None
+        if f"parameter {param} is not used" in str(exc):
+            raise SurfaceError(f"the equation does not depend on {param}: every frame would be the same") from None
+        raise
     last = Surface.parse(surface, **params, **{param: values[-1]})
     if values[0] != values[-1] and first.expr == last.expr:
         raise SurfaceError(f"the equation does not depend on {param}: every frame would be the same")
@@ -232,8 +249,12 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
     folder = Path(out)
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        # Written to before the frames are meshed, not after.
+        probe = folder / f".singmesh-probe-{os.getpid()}"
+        probe.open("wb").close()
+        probe.unlink()
     except OSError as exc:
-        raise SurfaceError(f"cannot create {folder}: {exc.strerror or exc}") from None
+        raise SurfaceError(f"cannot write into {folder}: {exc.strerror or exc}") from None
 
     settings = {"coarse": coarse, "fine": fine, "improve": improve, "size": size, "min_edge": min_edge,
                 "max_edge": max_edge, "chord": chord, "max_memory": max_memory}
@@ -262,7 +283,7 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
     data = {
         "equation": str(surface),
         "parameter": param,
-        "range": [values[0], values[-1]],
+        "range": [float(lo), float(hi)],
         "values": values,
         "params": {k: str(v) for k, v in params.items()},
         "box": [list(r) for r in box_list],
@@ -326,12 +347,14 @@ def _describe(m) -> dict[str, Any]:
                        "real_form": getattr(c, "real_form", None), "milnor": getattr(c, "milnor", None),
                        "branches": s.branches, "vertex": s.vertex is not None})
     counts = Counter(p["type"] or "unclassified" for p in points)
+    forms = Counter(p["real_form"] or p["type"] or "unclassified" for p in points)
     curves = [{"type": c.type, "sheets": int(c.sheets), "closed": bool(c.closed), "vertices": len(c.points),
                "length": float(c.length)} for c in m.singular_curves]
     r = m.report()
     return {
         "singular_points": points,
         "counts": dict(sorted(counts.items(), key=_type_order)),
+        "real_form_counts": dict(sorted(forms.items())),
         "singular_curves": curves,
         "curve_counts": dict(sorted(Counter(c["type"] for c in curves).items())),
         "special_points": [{"kind": sp.kind, "point": [float(v) for v in sp.point]} for sp in m.special_points],
@@ -371,15 +394,26 @@ def _failed(job: FrameJob, exc: BaseException | None) -> dict[str, Any]:
 
 
 def bifurcations(records: Sequence[dict]) -> list[dict]:
-    """The consecutive frames between which the singular points' or curves' types or counts change."""
+    """The consecutive frames between which the singular points (types, real forms, counts), the curves or the topology change.
+
+    The topology (Euler characteristic, pieces) changes also where the
+    surface passes a singular point between two frames: the change is
+    between them, and a finer sweep there finds the point.
+    """
     out = []
+    keys = ("counts", "real_form_counts", "curve_counts", "euler", "components")
     for a, b in zip(records, records[1:]):
         if a.get("error") or b.get("error"):
             continue
-        if a["counts"] != b["counts"] or a["curve_counts"] != b["curve_counts"]:
+        changed = [k for k in keys if a.get(k) != b.get(k)]
+        if changed:
             out.append({"between": [a["value"], b["value"]], "frames": [a["index"], b["index"]],
+                        "changed": changed,
                         "before": a["counts"], "after": b["counts"],
-                        "curves_before": a["curve_counts"], "curves_after": b["curve_counts"]})
+                        "forms_before": a["real_form_counts"], "forms_after": b["real_form_counts"],
+                        "curves_before": a["curve_counts"], "curves_after": b["curve_counts"],
+                        "euler_before": a["euler"], "euler_after": b["euler"],
+                        "components_before": a["components"], "components_after": b["components"]})
     return out
 
 

@@ -328,3 +328,61 @@ def test_sweep_mp4_animation(tmp_path):
     for i, f in enumerate(frames.astype(float)):
         d = [np.abs(f - p).mean() for p in pictures]
         assert int(np.argmin(d)) == i, d
+
+
+def test_a_change_of_topology_between_frames_is_a_bifurcation(tmp_path):
+    # x^2 + y^2 - z^2 = a in [-1, 1]^3: for a < 0 the two caps of a
+    # hyperboloid of two sheets (two discs: Euler characteristic 2, two
+    # pieces), for a > 0 one sheet (an annulus: 0, one piece).  The cone
+    # between them is at a = 0, no frame: no singular point is seen, the
+    # change is.
+    result = singmesh.sweep("x^2 + y^2 - z^2 - a", "a", -0.3, 0.3, 2, BOX, out=tmp_path, coarse=16, fine=64,
+                            picture_size=0, animation=None, progress=False)
+    assert [fr["counts"] for fr in result.frames] == [{}, {}]
+    assert [(fr["euler"], fr["components"]) for fr in result.frames] == [(2, 2), (0, 1)]
+    [b] = result.bifurcations
+    assert b["frames"] == [0, 1] and set(b["changed"]) == {"euler", "components"}
+    assert (b["euler_before"], b["euler_after"]) == (2, 0)
+
+
+def test_a_change_of_real_form_is_a_bifurcation(tmp_path):
+    # x^2 + y^2 + a z^2 + z^3 at the origin: a cone (indefinite) for a < 0,
+    # an isolated point (definite) for a > 0: an A1 in both frames, of two
+    # real forms.
+    result = singmesh.sweep("x^2 + y^2 + z^2 (z + a)", "a", -0.3, 0.3, 2, BOX, out=tmp_path, coarse=16, fine=64,
+                            picture_size=0, animation=None, progress=False)
+    assert [fr["counts"] for fr in result.frames] == [{"A1": 1}, {"A1": 1}]
+    [b] = result.bifurcations
+    assert "real_form_counts" in b["changed"] and b["forms_before"] != b["forms_after"]
+    assert sum(b["forms_before"].values()) == sum(b["forms_after"].values()) == 1
+
+
+def test_sweep_refusals_before_any_frame(tmp_path):
+    with pytest.raises(SurfaceError, match="100000000 frames is more than a sweep takes"):
+        singmesh.sweep("x^2 + y^2 + z^2 - a", "a", 0, 1, 100_000_000, BOX, out=tmp_path / "many")
+    assert not (tmp_path / "many").exists()
+    # A misspelt parameter is named.
+    with pytest.raises(SurfaceError, match="the equation has no parameter c"):
+        singmesh.sweep("x^2 + y^2 - (z^2 - a)^2", "c", 0, 1, 3, BOX, out=tmp_path / "c")
+    # A folder that cannot be written into: said before the frames are meshed.
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(SurfaceError, match="cannot"):
+        singmesh.sweep("x^2 + y^2 + z^2 - a", "a", 0, 1, 3, BOX, out=blocker / "sub")
+
+
+def test_cli_parameter_values_after_the_options(tmp_path, capsys):
+    # As the README writes them: name=value at the end of the line.
+    out = tmp_path / "m.ply"
+    assert main(["mesh", "x^2 + y^2 - (z^2 - a)^2", "-o", str(out), "--coarse", "16", "--fine", "64",
+                 "a=0.1"]) == 0
+    assert out.exists()
+    assert main(["sweep", "x^2 + y^2 - (z^2 - a)^2 + b", "--param", "a", "-0.3", "0.3", "--frames", "2",
+                 "--coarse", "16", "--fine", "64", "--picture-size", "0", "--quiet", "--out", str(tmp_path / "s"),
+                 "b=0.1"]) == 0
+    data = json.loads((tmp_path / "s" / "sweep.json").read_text(encoding="utf-8"))
+    assert data["params"] == {"b": "0.1"} and data["range"] == [-0.3, 0.3]
+    # An unknown short option is named as typed, not as a placeholder.
+    assert main(["mesh", "x^2 + y^2 + z^2 - 1", "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "-q" in err and "\0" not in err and len(err.strip().splitlines()) == 1
