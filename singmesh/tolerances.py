@@ -488,6 +488,10 @@ CURVE_BRANCH_GAP = 1.5
 #: more than this many cells: the usual tube's reach (CURVE_TUBE_RADIUS +
 #: CURVE_TUBE_GROW).  Sheets at 10 degrees are 1.5 cells apart 8.6 cells out.
 CURVE_CROSSING_RADIUS = 5.5
+#: ... measured on the piece's vertices more than CURVE_BALL_GROW cells
+#: from its special points (other than ends on the box), when it has at
+#: least this many.
+CURVE_CROSSING_MIN_VERTICES = 4
 
 #: A rail with both ends on one face of the box at most this many cells
 #: apart is a stub of a half-sheet's trace that ran along the face

@@ -1045,19 +1045,28 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
         d = np.abs(curves.points[:, None, :] - meets[None]).max(axis=2).min(axis=1)
         in_meet_ball = d <= tol.CURVE_MEET_BALL * step
     cross = crossing_reach(surface, curves.points, _tangents(curves.points, curves.edges), step)
+    specials = np.array([sp.point for sp in curves.special if sp.kind != "end on the box"]).reshape(-1, 3)
+    near_special = np.zeros(len(curves.points), bool)
+    if len(specials):
+        d = np.abs(curves.points[:, None, :] - specials[None]).max(axis=2).min(axis=1)
+        near_special = d <= tol.CURVE_BALL_GROW * step
     for c in curves.pieces:
         # A piece as a whole: its median (where a cusp degenerates at a
         # special point, the balls around it widen the tube).  The tacnode
         # edge (two tangent sheets) is wide however measured.
         r = float(np.median(reach[c.vertices]))
         if c.type.startswith("A1") and c.sheets >= 2:
-            # Two sheets crossing at a small angle, as a whole piece (near a
-            # pinch point the angle goes to 0 on a piece that is wide apart
-            # elsewhere: the ball round the point is for that).
-            rc = float(np.median(cross[c.vertices]))
-            if rc > tol.CURVE_CROSSING_RADIUS:
-                v_wide[c.vertices] = True
-                need[c.vertices] = rc
+            # Two sheets crossing at a small angle, as a whole piece, away
+            # from the special points: at a pinch point or where curves
+            # cross the angle goes to 0 on a piece that is wide apart
+            # elsewhere (the balls round the points are for that), and a
+            # piece of a few vertices between two of them is all ball.
+            away = c.vertices[~near_special[c.vertices]]
+            if len(away) >= tol.CURVE_CROSSING_MIN_VERTICES:
+                rc = float(np.median(cross[away]))
+                if rc > tol.CURVE_CROSSING_RADIUS:
+                    v_wide[c.vertices] = True
+                    need[c.vertices] = rc
             continue
         tacnode = c.sheets >= 2 and not c.type.startswith(("A1", "D4"))
         if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
