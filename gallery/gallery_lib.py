@@ -8,7 +8,6 @@ itself was started through ``runpy`` by ``singmesh gallery``.
 
 from __future__ import annotations
 
-import math
 import re
 import signal
 import sys
@@ -28,6 +27,8 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 import numpy as np
+
+from singmesh.files import json_safe
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_CATALOGUE = HERE / "catalogue.toml"
@@ -369,22 +370,6 @@ def type_summary(names: Iterable[str]) -> str:
 
 
 # ---------------------------------------------------------------- the work
-def _clean(value):
-    """JSON-safe: numpy scalars to Python, NaN and infinities to None."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _clean(value.tolist())
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    return value
-
-
 def _singularity(record) -> dict[str, Any]:
     """What the page shows of one singular-point record (any object with ``.point``)."""
     point = np.asarray(getattr(record, "point", [np.nan] * 3), dtype=float).reshape(-1)[:3]
@@ -460,7 +445,7 @@ def run_entry(entry: Entry, out_dir: str | Path, size: int = 640,
         text = f"{w.category.__name__}: {w.message} ({Path(w.filename).name}:{w.lineno})"
         seen[text] = seen.get(text, 0) + 1
     record["warnings"] = [t if n == 1 else f"{t} [{n} times]" for t, n in list(seen.items())[:20]]
-    return _clean(record)
+    return json_safe(record)
 
 
 def _record_error(record: dict[str, Any], exc: BaseException) -> None:

@@ -35,7 +35,6 @@ from __future__ import annotations
 import argparse
 import datetime as _dt
 import json
-import os
 import platform
 import sys
 import time
@@ -55,6 +54,7 @@ from gallery_lib import CatalogueError, load_catalogue, load_definitions, run_en
 
 from singmesh.errors import SurfaceError  # noqa: E402
 from singmesh.extras import require  # noqa: E402
+from singmesh.files import json_safe, writable_folder  # noqa: E402
 
 DEFAULT_OUT = HERE / "out"
 
@@ -118,7 +118,7 @@ def _failure(entry: gallery_lib.Entry, message: str) -> dict[str, Any]:
     """The record of an entry whose worker process never returned a result."""
     from dataclasses import asdict
 
-    return gallery_lib._clean({
+    return json_safe({
         **asdict(entry), "ok": False, "error": message, "unread": None, "traceback": None, "stage": "worker",
         "time": None, "render_time": None, "report": None, "report_text": None,
         "singularities": [], "files": {}, "warnings": [],
@@ -214,15 +214,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not chosen:
         print(f"gallery: error: no catalogue entry matches {' '.join(args.only or [])!r}", file=sys.stderr)
         return 2
-    out = Path(args.out)
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        # Written to before the entries are meshed, not after.
-        probe = out / f".gallery-probe-{os.getpid()}"
-        probe.open("wb").close()
-        probe.unlink()
-    except OSError as exc:
-        print(f"gallery: error: cannot write into {out}: {exc.strerror or exc}", file=sys.stderr)
+        out = writable_folder(args.out)  # before the entries are meshed, not after
+    except SurfaceError as exc:
+        print(f"gallery: error: {exc}", file=sys.stderr)
         return 2
 
     t0 = time.perf_counter()
@@ -235,7 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     meta = _meta(args.jobs, total, catalogue)
     meta["selection"] = args.only or []
     (out / "report.json").write_text(
-        json.dumps(gallery_lib._clean({"meta": meta, "entries": records}), indent=1, allow_nan=False),
+        json.dumps(json_safe({"meta": meta, "entries": records}), indent=1, allow_nan=False),
         encoding="utf-8")
     index = write_site(out, records, groups, meta)
 

@@ -66,6 +66,19 @@ def _hide_leading_minus(argv: list[str], takes_value: set[str]) -> tuple[list[st
     return out, hidden
 
 
+def _parse_with_equation(p: _Parser, argv: list[str]) -> argparse.Namespace:
+    """``p``'s arguments, an equation starting with '-' kept as a word and parameter values after the options.
+
+    Intermixed: ``name=value`` may follow the options, as the README writes them.
+    """
+    takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
+    argv, hidden = _hide_leading_minus(argv, takes_value)
+    p.hidden = hidden
+    args = p.parse_intermixed_args(argv)
+    args.args = [hidden.get(a, a) for a in args.args]
+    return args
+
+
 def _params(items: list[str]) -> dict[str, str]:
     out = {}
     for item in items:
@@ -183,12 +196,7 @@ def _mesh_command(argv: list[str]) -> int:
     p.add_argument("--defs", metavar="FILE", help="a SingSurf definition file; mesh the definition --name")
     p.add_argument("--name", help="the definition to mesh (with --defs)")
     argv, numbers = _take_box(argv)
-    takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
-    argv, hidden = _hide_leading_minus(argv, takes_value)
-    p.hidden = hidden
-    # Intermixed: parameter values may follow the options (name=value at the end).
-    args = p.parse_intermixed_args(argv)
-    args.args = [hidden.get(a, a) for a in args.args]
+    args = _parse_with_equation(p, argv)
     box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]
     if args.output:
         _check_output(args.output)
@@ -272,12 +280,7 @@ def _sweep_command(argv: list[str]) -> int:
     p.add_argument("--name", help="the definition to sweep (with --defs)")
     argv, numbers = _take_box(argv)
     argv, swept = _take_param(argv)
-    takes_value = {o for a in p._actions if a.nargs is None for o in a.option_strings}
-    argv, hidden = _hide_leading_minus(argv, takes_value)
-    p.hidden = hidden
-    # Intermixed: parameter values may follow the options (name=value at the end).
-    args = p.parse_intermixed_args(argv)
-    args.args = [hidden.get(a, a) for a in args.args]
+    args = _parse_with_equation(p, argv)
     if swept is None:
         raise SurfaceError("give the parameter swept and its range: --param NAME LO HI")
     box = None if numbers is None else [numbers[0:2], numbers[2:4], numbers[4:6]]

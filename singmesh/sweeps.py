@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import sys
 import tempfile
@@ -35,6 +34,7 @@ import numpy as np
 
 from .errors import SurfaceError
 from .extras import missing, require
+from .files import json_safe, writable_folder
 
 #: Animation formats by suffix; MP4 needs ffmpeg through imageio-ffmpeg.
 ANIMATIONS = (".gif", ".mp4")
@@ -246,15 +246,7 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
             require("an MP4 animation", ["imageio_ffmpeg"], extra="video")
     if scheduler is not None:
         require("--scheduler (Dask)", ["dask", "distributed"], extra="dask")
-    folder = Path(out)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        # Written to before the frames are meshed, not after.
-        probe = folder / f".singmesh-probe-{os.getpid()}"
-        probe.open("wb").close()
-        probe.unlink()
-    except OSError as exc:
-        raise SurfaceError(f"cannot write into {folder}: {exc.strerror or exc}") from None
+    folder = writable_folder(out)  # before the frames are meshed, not after
 
     settings = {"coarse": coarse, "fine": fine, "improve": improve, "size": size, "min_edge": min_edge,
                 "max_edge": max_edge, "chord": chord, "max_memory": max_memory}
@@ -293,12 +285,12 @@ def sweep(surface, param: str, lo: float, hi: float, frames: int, box=None, *, o
         "frames": records,
         "bifurcations": bifurcations(records),
     }
-    (folder / "sweep.json").write_text(_dumps(_clean(data)), encoding="utf-8")
+    (folder / "sweep.json").write_text(_dumps(json_safe(data)), encoding="utf-8")
     (folder / "times.json").write_text(json.dumps(
         {"total": time.perf_counter() - t0, "frames": times, "jobs": jobs,
          "scheduler": scheduler if scheduler is None or isinstance(scheduler, str) else repr(scheduler)},
         indent=1) + "\n", encoding="utf-8")
-    return SweepResult(data=_clean(data), folder=folder, animation=movie, times=times)
+    return SweepResult(data=json_safe(data), folder=folder, animation=movie, times=times)
 
 
 def mesh_frame(job: FrameJob) -> dict[str, Any]:
@@ -438,24 +430,6 @@ def _dumps(data: dict) -> str:
     """``data`` as indented JSON with each list of numbers on one line (points, boxes, ranges)."""
     text = json.dumps(data, indent=1, allow_nan=False)
     return _NUMBER_LIST.sub(lambda m: "[" + ", ".join(v.strip() for v in m.group(1).split(",")) + "]", text) + "\n"
-
-
-def _clean(value):
-    """JSON-safe: numpy scalars as Python numbers, non-finite floats as None."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _clean(value.tolist())
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    return value
 
 
 class _Progress:
