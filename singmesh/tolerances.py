@@ -492,6 +492,9 @@ CURVE_CROSSING_RADIUS = 5.5
 #: from its special points (other than ends on the box), when it has at
 #: least this many.
 CURVE_CROSSING_MIN_VERTICES = 4
+#: ... and only on a piece at least this many times that reach long (a
+#: shorter one is all ends on the box).
+CURVE_CROSSING_MIN_LENGTH = 4.0
 
 #: A rail with both ends on one face of the box at most this many cells
 #: apart is a stub of a half-sheet's trace that ran along the face

@@ -1064,7 +1064,10 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
             away = c.vertices[~near_special[c.vertices]]
             if len(away) >= tol.CURVE_CROSSING_MIN_VERTICES:
                 rc = float(np.median(cross[away]))
-                if rc > tol.CURVE_CROSSING_RADIUS:
+                # A piece shorter than a few such radii is all ends on the
+                # box (a curve across a thin box): the tube would fill it.
+                length = float(np.linalg.norm(np.diff(curves.points[c.vertices], axis=0), axis=1).sum()) / step
+                if rc > tol.CURVE_CROSSING_RADIUS and length >= tol.CURVE_CROSSING_MIN_LENGTH * rc:
                     v_wide[c.vertices] = True
                     need[c.vertices] = rc
             continue

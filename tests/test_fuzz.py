@@ -61,6 +61,13 @@ REGRESSIONS = [
     ("s1-638 crossing off the curve",
      "(0.50443749619891*y*z - 2.75237021685692*x*y - 2.2279695506216*x^2 - 2.3657511302834*x + 0.129930238689852)"
      "*(1*z^2 + 4/3*y*z + 1/3*x)", ((-0.5, 0.5), (-1.0, 1.0), (-2.0, 2.0)), 8, 64),
+    # The double curve crosses the thin box (y in -0.5 .. 0.5) at a small
+    # angle: a piece of 16 cells asked for a 13-cell tube, which filled it
+    # and reached both faces (5 open edges, 69 curve edges with other than
+    # 4 triangles; skeleton/singular_curves.py _tube_widths).
+    ("s1-242 small angle across a thin box",
+     "(2.80271574643564*x*y - 0.138602685654024*z)*(2.14558460746148*y*z - 1.53281678435219*y^2"
+     " + 1.69046662791925*x*y + 0.16909525811052)", ((-2.0, 2.0), (-0.5, 0.5), (-2.0, 2.0)), 8, 64),
 ]
 
 
