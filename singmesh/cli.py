@@ -99,12 +99,10 @@ def _take_box(argv: list[str]) -> tuple[list[str], list[float] | None]:
     Taken before argparse, which reads ``-1e300`` or ``-inf`` as an option
     (only ``-1`` and ``-1.5`` look like numbers to it).
     """
-    if "--box" not in argv:
+    rest, given = _take_option(argv, "--box", 6, "--box is given twice")
+    if given is None:
         return argv, None
     i = argv.index("--box")
-    if "--box" in argv[i + 1:]:
-        raise SurfaceError("--box is given twice")
-    given = argv[i + 1:i + 7]
     numbers = []
     for word in given:
         if not _is_number(word):
@@ -116,7 +114,21 @@ def _take_box(argv: list[str]) -> tuple[list[str], list[float] | None]:
         raise SurfaceError(f"--box takes six numbers X0 X1 Y0 Y1 Z0 Z1; got {got}{after}")
     if len(argv) > i + 7 and _is_number(argv[i + 7]):
         raise SurfaceError(f"--box takes six numbers X0 X1 Y0 Y1 Z0 Z1; a seventh, {argv[i + 7]!r}, follows")
-    return argv[:i] + argv[i + 7:], numbers
+    return rest, numbers
+
+
+def _take_option(argv: list[str], option: str, count: int, twice: str) -> tuple[list[str], list[str] | None]:
+    """``argv`` without ``option`` and the ``count`` words after it, and those words (None if absent).
+
+    Options whose values argparse would misread (negative numbers such as
+    ``-1e300``) are taken out before it; given twice is the error ``twice``.
+    """
+    if option not in argv:
+        return argv, None
+    i = argv.index(option)
+    if option in argv[i + 1:]:
+        raise SurfaceError(twice)
+    return argv[:i] + argv[i + 1 + count:], argv[i + 1:i + 1 + count]
 
 
 def _is_number(word: str) -> bool:
@@ -234,15 +246,13 @@ def _mesh_command(argv: list[str]) -> int:
 
 def _take_param(argv: list[str]) -> tuple[list[str], tuple[str, float, float] | None]:
     """``argv`` without ``--param NAME LO HI``, and the three (numbers read as :func:`_take_box` does)."""
-    if "--param" not in argv:
+    rest, given = _take_option(argv, "--param", 3,
+                               "--param is given twice: one parameter is swept (give the others as name=value)")
+    if given is None:
         return argv, None
-    i = argv.index("--param")
-    if "--param" in argv[i + 1:]:
-        raise SurfaceError("--param is given twice: one parameter is swept (give the others as name=value)")
-    given = argv[i + 1:i + 4]
     if len(given) < 3 or not all(_is_number(w) for w in given[1:]):
         raise SurfaceError(f"--param takes a name and two numbers, NAME LO HI; got {' '.join(given)!r}")
-    return argv[:i] + argv[i + 4:], (given[0], float(given[1]), float(given[2]))
+    return rest, (given[0], float(given[1]), float(given[2]))
 
 
 def _sweep_command(argv: list[str]) -> int:
