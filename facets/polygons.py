@@ -90,6 +90,10 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     sq_axis, sq_lo, sq_hi = _square_bounds_many(
         tree, links.square[np.concatenate([cycles.squares[a:b] for a, b in spans]) if spans else np.zeros(0, np.int64)])
     directions = {}
+    # The Hessians of all star points in one call (each with the bits of a
+    # call at that point alone).
+    at = list(dict.fromkeys(stars[cycles.box[c]] for c in star_cycles))
+    hessians = dict(zip(at, surf.hessian_each(np.array([points[i].point for i in at]).reshape(-1, 3))))
     # The skeleton curves of all star cycles are traced in one batch.
     jobs = []
     done = 0
@@ -97,7 +101,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
         i = stars[cycles.box[c]]
         p = points[i].point
         if i not in directions:
-            hess = surf.hessian(p)
+            hess = hessians[i]
             # A tip (F not differentiable there) has no Hessian and no skeleton.
             directions[i] = skeleton_directions(hess) if np.isfinite(hess).all() else np.zeros((0, 3))
         e = done + b - a

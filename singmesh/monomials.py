@@ -49,15 +49,20 @@ def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:
     return evaluate_tensors([coeffs], points)[0]
 
 
-def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
+def evaluate_tensors(tensors, points: np.ndarray, alone: bool = False) -> list[np.ndarray]:
     """:func:`evaluate_tensor` for several tensors of one shape at the same points.
 
     The powers of the coordinates are formed once for all of them; each
     value is computed exactly as :func:`evaluate_tensor` computes it alone.
+    With ``alone``, each point's values have the bits of a call with that
+    point alone (BLAS takes one row (gemv) in another order than several
+    (gemm)): many per-point calls in one.
     """
     p = np.asarray(points, dtype=float)
     shape = p.shape[:-1]
     p = p.reshape(-1, 3)
+    if alone:
+        return [v.reshape(shape) for v in _contract(tensors, p, alone=True)]
     # Many points go in blocks: the (K, ny * nz) intermediate of a whole
     # large batch does not fit in cache and costs several times more.
     # Each row's value does not depend on the block (BLAS's gemm), but a
@@ -76,15 +81,22 @@ def evaluate_tensors(tensors, points: np.ndarray) -> list[np.ndarray]:
 _BLOCK = 8192
 
 
-def _contract(tensors, p: np.ndarray) -> list[np.ndarray]:
-    """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3)."""
+def _contract(tensors, p: np.ndarray, alone: bool = False) -> list[np.ndarray]:
+    """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3).
+
+    ``alone``: the x contraction row by row (stacked one-row products, as
+    for K = 1), not as one matrix product of all rows.
+    """
     nx, ny, nz = tensors[0].shape
     px, py, pz = powers(p[:, 0], nx), powers(p[:, 1], ny)[:, None, :], powers(p[:, 2], nz)
     out = []
     for coeffs in tensors:
         # Contract one variable at a time (a matrix product, then two
         # row-wise sums): einsum with '...' does not optimise the four-way product.
-        t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
+        if alone:
+            t = np.matmul(px[:, None, :], coeffs.reshape(nx, ny * nz))[:, 0]  # (K, ny*nz)
+        else:
+            t = px @ coeffs.reshape(nx, ny * nz)  # (K, ny*nz)
         # Batched matrix products (BLAS), not einsum's slow generic loop.
         t = np.matmul(py, t.reshape(-1, ny, nz))[:, 0]  # (K, nz)
         out.append(np.einsum("kl,kl->k", t, pz))

@@ -247,6 +247,12 @@ class Surface(abc.ABC):
     def hessian(self, points) -> np.ndarray:
         """Hessian of F at ``points`` (..., 3): shape (..., 3, 3)."""
 
+    def hessian_each(self, points) -> np.ndarray:
+        """The Hessian at each row of ``points`` (K, 3) as :meth:`hessian` gives it
+        for that point alone: (K, 3, 3)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        return np.array([self.hessian(p) for p in points]).reshape(-1, 3, 3)
+
     @abc.abstractmethod
     def jet(self, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """F (...), grad F (..., 3) and the Hessian (..., 3, 3) at ``points`` in one pass."""
@@ -512,6 +518,14 @@ class PolynomialSurface(Surface):
         """Hessian of F at ``points`` (..., 3), shape (..., 3, 3)."""
         h = self.hessian_coeffs
         v = evaluate_tensors([h[a][b] for a in range(3) for b in range(3)], points)
+        rows = [np.stack(v[3 * a:3 * a + 3], -1) for a in range(3)]
+        return np.stack(rows, axis=-2)
+
+    def hessian_each(self, points) -> np.ndarray:
+        """:meth:`Surface.hessian_each`: one call for all the points (stacked one-row products)."""
+        h = self.hessian_coeffs
+        v = evaluate_tensors([h[a][b] for a in range(3) for b in range(3)],
+                             np.asarray(points, dtype=float).reshape(-1, 3), alone=True)
         rows = [np.stack(v[3 * a:3 * a + 3], -1) for a in range(3)]
         return np.stack(rows, axis=-2)
 
