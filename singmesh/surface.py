@@ -33,7 +33,7 @@ import sympy
 from singmesh.boxes import polynomial_bounds, polynomial_lines
 from singmesh.boxes.bernstein import bernstein_on_box
 from singmesh.boxes.bernstein import split as bernstein_split
-from singmesh.skeleton.splitting import compose
+from singmesh.skeleton.splitting import compose, translate_many
 
 from .errors import SurfaceError
 from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
@@ -306,6 +306,18 @@ class Surface(abc.ABC):
         ``order``, by default :attr:`degree`.
         """
 
+    def taylor_each(self, points) -> np.ndarray:
+        """:meth:`taylor` (default order) at each row of ``points`` (K, 3): (K, n+1, n+1, n+1)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        return np.array([self.taylor(p) for p in points])
+
+    def magnitudes_each(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`magnitude` (K,) and :meth:`gradient_magnitude` (K, 3) at each row of
+        ``points`` (K, 3), each as a call at that point alone gives it."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        return (np.array([self.magnitude(p) for p in points], dtype=float).reshape(-1),
+                np.array([self.gradient_magnitude(p) for p in points], dtype=float).reshape(-1, 3))
+
     def third_derivatives(self, point) -> np.ndarray:
         """The tensor of third derivatives of F at ``point`` (3,): (3, 3, 3).
 
@@ -574,6 +586,17 @@ class PolynomialSurface(Surface):
         out = np.zeros((n + 1,) * 3)
         out[: self.degree + 1, : self.degree + 1, : self.degree + 1] = T
         return out
+
+    def taylor_each(self, points) -> np.ndarray:
+        """:meth:`Surface.taylor_each`: all the translations in one pass (the bits of each point's own)."""
+        return translate_many(self.coeffs, np.asarray(points, dtype=float).reshape(-1, 3), self.degree)
+
+    def magnitudes_each(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`Surface.magnitudes_each` in two calls (stacked one-row products)."""
+        p = np.abs(np.asarray(points, dtype=float).reshape(-1, 3))
+        mag = evaluate_tensors([np.abs(self.coeffs)], p, alone=True)[0]
+        grad = evaluate_tensors([np.abs(g) for g in self.gradient_coeffs], p, alone=True)
+        return mag, np.stack(grad, axis=-1)
 
     def third_derivatives(self, point) -> np.ndarray:
         """Third derivatives at ``point`` (3,) from their monomial tensors (cached)."""

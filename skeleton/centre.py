@@ -115,7 +115,7 @@ def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
 
 
 def centre(surface: Surface, p: np.ndarray, reach: float,
-           limit: float) -> tuple[np.ndarray, SingularityType, Frame]:
+           limit: float, first=None) -> tuple[np.ndarray, SingularityType, Frame]:
     """The centre of the singular point near ``p``, its type and frame.
 
     Parameters
@@ -132,6 +132,10 @@ def centre(surface: Surface, p: np.ndarray, reach: float,
         the precision of the input, and a node whose small eigenvalue looked
         like a kernel is left where it is (the step would leave it).
 
+    first : (SingularityType, Frame) or SurfaceError, optional
+        ``analyse(surface, p)`` if known (:func:`analyse_each`): its result
+        or what it raised.
+
     Raises
     ------
     NotSingularError
@@ -139,7 +143,10 @@ def centre(surface: Surface, p: np.ndarray, reach: float,
     """
     p = np.asarray(p, dtype=float)
     start = p.copy()
-    first = analyse(surface, p)  # NotSingularError if p is not singular
+    if first is None:
+        first = analyse(surface, p)  # NotSingularError if p is not singular
+    elif isinstance(first, Exception):
+        raise first
     frame = first[1]
     if frame.corank == 0 and np.abs(frame.eigenvalues).min() > tol.CENTRE_RANK_RTOL * frame.scale:
         # A node even to the loose rank test below: read loosely it is an

@@ -105,7 +105,7 @@ from singmesh.tolerances import (
 
 from .splitting import compose, degree_grid, derivative, mul, series_order, split
 
-__all__ = ["SingularityType", "NotSingularError", "Frame", "analyse", "classify", "classify_command"]
+__all__ = ["SingularityType", "NotSingularError", "Frame", "analyse", "analyse_each", "classify", "classify_command"]
 
 
 class NotSingularError(SurfaceError):
@@ -272,16 +272,49 @@ class Frame:
     scale: float = 0.0
 
 
+def analyse_each(s: Surface, points: np.ndarray) -> list:
+    """:func:`analyse` (default tolerances) at each row of ``points`` (K, 3).
+
+    The Taylor polynomials and the sizes of F's terms of all the points
+    are computed in one pass each (with the bits of each point's own
+    calls); the rest is :func:`analyse`'s, point by point.
+
+    Returns
+    -------
+    list of (SingularityType, Frame), or of the exception (a SurfaceError:
+    NotSingularError, no jet) that :func:`analyse` raises at that point
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(points) == 0:
+        return []
+    try:
+        known = list(zip(s.taylor_each(points), *s.magnitudes_each(points)))
+    except Exception:
+        # (a point where F has no jet: each point says so on its own)
+        known = [None] * len(points)
+    out: list = []
+    for p, k in zip(points, known):
+        # Whatever a point raises is its own answer, raised when (and only
+        # if) the caller asks for that point.
+        try:
+            out.append(analyse(s, p, _known=k))
+        except Exception as e:
+            out.append(e)
+    return out
+
+
 def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
-            jet_rtol: float = CLASSIFY_JET_RTOL) -> tuple[SingularityType, Frame]:
+            jet_rtol: float = CLASSIFY_JET_RTOL, _known=None) -> tuple[SingularityType, Frame]:
     """:func:`classify` for a parsed surface, with the frame the type was read in.
 
     ``rank_rtol`` sets which Hessian eigenvalues count as zero and
     ``jet_rtol`` which Taylor coefficients do (relative to the largest);
-    centring reads the type more loosely than naming does.
+    centring reads the type more loosely than naming does.  ``_known``
+    (from :func:`analyse_each`): the Taylor polynomial at p and the sizes
+    of F's and grad F's terms there, computed already.
     """
     # Taylor polynomial at p (exact up to rounding: no truncation).
-    T = s.taylor(p)
+    T = s.taylor(p) if _known is None else _known[0]
     if not np.isfinite(T).all():
         # (a root of a sum of squares vanishing there: the apex of
         # sqrt(x^2 + y^2) = |z|; mesh() places such points as tips)
@@ -289,7 +322,7 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
                            "it has no Taylor jet to classify")
     deg = degree_grid(3, T.shape[0] - 1)
     S = float(np.max(np.abs(T[deg >= 2]), initial=0.0))
-    _check_singular(s, p, T, S)
+    _check_singular(s, p, T, S, None if _known is None else _known[1:])
 
     hess = T[_HESSIAN_INDEX] * _HESSIAN_FACTOR
     lam, vec = np.linalg.eigh(hess)
@@ -357,16 +390,20 @@ def _unit(a: int) -> tuple[int, int, int]:
     return tuple(e)
 
 
-def _check_singular(s: Surface, p: np.ndarray, T: np.ndarray, S: float) -> None:
-    """Raise NotSingularError unless F(p) = 0 and grad F(p) = 0 to tolerance."""
+def _check_singular(s: Surface, p: np.ndarray, T: np.ndarray, S: float, sizes=None) -> None:
+    """Raise NotSingularError unless F(p) = 0 and grad F(p) = 0 to tolerance.
+
+    ``sizes``: ``s.magnitude(p)`` and ``s.gradient_magnitude(p)`` if known.
+    """
     eps = np.finfo(float).eps
     value = float(T[0, 0, 0])
     grad = np.array([T[_unit(a)] for a in range(3)])
     # Rounding error of evaluating F and its gradient at p, and what the
     # rounding of the input's own coefficients can make of them.
     ulps = ZERO_ULPS * eps + INPUT_ROUNDING * s.degree * s.rounding
-    round_v = ulps * float(s.magnitude(p))
-    round_g = ulps * float(np.max(s.gradient_magnitude(p)))
+    magnitude, gradient_magnitude = (s.magnitude(p), s.gradient_magnitude(p)) if sizes is None else sizes
+    round_v = ulps * float(magnitude)
+    round_g = ulps * float(np.max(gradient_magnitude))
     tol = CLASSIFY_SINGULAR_RTOL * S
     bad = []
     if abs(value) > tol + round_v:

@@ -27,7 +27,7 @@ from singmesh import tolerances as tol
 from singmesh.surface import CHILD_OFFSETS, Surface
 
 from .centre import centre, residual
-from .classify import NotSingularError
+from .classify import NotSingularError, analyse_each
 from .points import SingularPoint
 
 
@@ -215,8 +215,12 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     regions: list[tuple[np.ndarray, float]] = []   # centres and the radius their starts fall in
     # The curve test of every start, in one batch (a few are not needed).
     along = _on_curve_many(surface, x, cell, steps=(4, 8))
+    # The first classification of every other start, in one batch (those
+    # in the region of a point found before are not needed).
+    first = iter(analyse_each(surface, x[~along]))
     with np.errstate(all="ignore"):
         for p, on in zip(x, along.tolist()):
+            known = None if on else next(first)
             if regions and (_lengths(p - np.array([c for c, _ in regions]))
                             <= np.array([r for _, r in regions])).any():
                 continue  # another start in the region of a point already centred
@@ -227,7 +231,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
                 regions.append((p, 3.0 * cell))
                 continue
             try:
-                q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit)
+                q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit, first=known)
             except NotSingularError:
                 continue  # singular only to the loose test
             if kind.milnor is None and _on_curve(surface, q, cell):

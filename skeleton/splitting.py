@@ -34,6 +34,7 @@ __all__ = [
     "mul",
     "derivative",
     "compose",
+    "translate_many",
     "substitute",
     "split",
     "series_order",
@@ -190,6 +191,53 @@ def compose(coeffs: np.ndarray, const: Sequence[float], lin: np.ndarray, N: int)
             acc = Q[lead + (i,)] + _mul_affine(acc, const[a], lin[a], m, N)
         Q = acc
     return truncate(Q, N, m)
+
+
+def translate_many(coeffs: np.ndarray, points: np.ndarray, N: int) -> np.ndarray:
+    """``compose(coeffs, p, np.eye(3), N)`` for every row p of ``points`` (K, 3), in one pass.
+
+    The same products and sums as :func:`compose` makes for each point
+    alone (the matrix product per point as a stacked one, the same BLAS
+    call), so each result has the bits of its own call: (K, N+1, N+1, N+1).
+    """
+    coeffs = np.asarray(coeffs, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if coeffs.ndim != 3:
+        raise ValueError("coeffs has %d axes but 3 forms were given" % coeffs.ndim)
+    k = len(points)
+    shape = (N + 1,) * 3
+
+    def times(T, c, axis):
+        # _mul_affine(T, c, unit vector along ``axis``, 3, N) per point:
+        # c T (0 where c is 0, as compose's zeros_like), plus T shifted by
+        # one along the axis (1.0 * T is T).
+        cc = c.reshape((k,) + (1,) * (T.ndim - 1))
+        out = np.where(cc != 0.0, cc * T, 0.0)
+        src = [slice(None)] * T.ndim
+        dst = [slice(None)] * T.ndim
+        src[T.ndim - 3 + axis] = slice(0, N)
+        dst[T.ndim - 3 + axis] = slice(1, N + 1)
+        out[tuple(dst)] += 1.0 * T[tuple(src)]
+        return out
+
+    s_last = coeffs.shape[-1]
+    unit = np.zeros((k,) + shape)
+    unit[(slice(None),) + (0,) * 3] = 1.0
+    powers = [unit]
+    for _ in range(1, s_last):
+        powers.append(times(powers[-1], points[:, 2], 2))
+    P = np.ascontiguousarray(np.stack(powers, axis=1).reshape(k, s_last, -1))
+    Q = np.matmul(coeffs.reshape(-1, s_last), P).reshape((k,) + coeffs.shape[:-1] + shape)
+    for a in (1, 0):
+        lead = (slice(None),) * (a + 1)
+        acc = Q[lead + (Q.shape[a + 1] - 1,)]
+        for i in range(Q.shape[a + 1] - 2, -1, -1):
+            acc = Q[lead + (i,)] + times(acc, points[:, a], 0 if a == 0 else 1)
+        Q = acc
+    # truncate(Q, N, 3) per point: degree > N zeroed.
+    out = np.array(Q, dtype=float, copy=True)
+    out[:, degree_grid(3, N) > N] = 0.0
+    return out
 
 
 def substitute(T: np.ndarray, phis: Sequence[np.ndarray], N: int) -> np.ndarray:

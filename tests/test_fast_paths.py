@@ -451,3 +451,58 @@ def test_faces_without_loops_along_rows_are_the_sign_tests():
         want = (sign_definite(np.diff(face, axis=1), (1, 2)) | sign_definite(np.diff(face, axis=2), (1, 2))
                 | (face.min(axis=(1, 2), initial=np.inf) >= 0) | (face.max(axis=(1, 2), initial=-np.inf) < 0))
         assert np.array_equal(face_without_loops(face), want)
+
+
+def _point_cloud(seed: int) -> np.ndarray:
+    # Points as the per-point calls meet them: general position at several
+    # scales, with coordinates exactly 0 and -0 (a point on a split plane).
+    rng = np.random.default_rng(seed)
+    p = np.concatenate([rng.normal(size=(40, 3)) * s for s in (1e-3, 0.5, 2.0)])
+    p[::7, 0] = 0.0
+    p[::5, 2] = -0.0
+    p[::11] = 0.0
+    return p
+
+
+@pytest.mark.parametrize("text", ["4(x^2+y^2+z^2) + 16 x y z - 1", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0],
+                                  "x y z + 0.123456789012345 x^3 - 0.3 y^5 z^2 + 1.5 z^6"])
+def test_each_point_alone_in_one_call(text):
+    # hessian_each, taylor_each and magnitudes_each give every point the
+    # bits of hessian(), taylor(), magnitude() and gradient_magnitude()
+    # called at that point alone (one BLAS row is not a row of a batch).
+    s = Surface.parse(text)
+    pts = _point_cloud(3)
+    hess = s.hessian_each(pts)
+    taylor = s.taylor_each(pts)
+    mag, gmag = s.magnitudes_each(pts)
+    for k, p in enumerate(pts):
+        assert hess[k].tobytes() == s.hessian(p).tobytes()
+        assert taylor[k].tobytes() == s.taylor(p).tobytes()
+        assert mag[k].tobytes() == np.asarray(s.magnitude(p), float).tobytes()
+        assert gmag[k].tobytes() == s.gradient_magnitude(p).tobytes()
+
+
+def test_analyse_each_is_analyse_per_point():
+    # At the nodes of Cayley's cubic (float-rotated: 15-digit input) and at
+    # points that are not singular: the same types and frames, the same
+    # refusals.
+    from singmesh.skeleton.classify import analyse, analyse_each
+
+    text, _ = float_rotated("4(x^2+y^2+z^2) + 16 x y z - 1", 5)
+    s = Surface.parse(text)
+    from singmesh.skeleton.singular import singular_points
+
+    nodes = np.array([sp.point for sp in singular_points(s, BOX * 1.5)[0]])
+    assert len(nodes) == 4
+    pts = np.concatenate([nodes, [[0.3, 0.2, 0.1]]])
+    got = analyse_each(s, pts)
+    for p, g in zip(pts, got):
+        try:
+            want = analyse(s, p)
+        except Exception as e:
+            assert type(g) is type(e) and str(g) == str(e)
+            continue
+        assert g[0] == want[0]
+        assert g[1].basis.tobytes() == want[1].basis.tobytes()
+        assert g[1].eigenvalues.tobytes() == want[1].eigenvalues.tobytes()
+    assert isinstance(got[-1], Exception)
