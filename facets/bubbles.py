@@ -54,17 +54,21 @@ def lattice_specks(vertices: np.ndarray, faces: np.ndarray, cell: float, fixed: 
     k, label = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
     face_label = label[faces[:, 0]]
     sizes = np.bincount(face_label, minlength=k)
-    # A piece with an open edge (on the box: one inside is not made) is
-    # not closed; a piece holding a singular vertex is the singularity's.
-    # Each undirected edge as one integer key (lower end * n + upper end):
-    # a 1-d unique is some 12 times faster than unique rows (axis=0).
-    key, count = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
+    # A piece holding a singular vertex is the singularity's.
     spoiled = np.zeros(k, bool)
-    np.logical_or.at(spoiled, label[key[count == 1] // n], True)
     np.logical_or.at(spoiled, label[fixed], True)
     # Never the whole mesh: the largest piece stays whatever it is.
     spoiled[np.argmax(sizes)] = True
     candidate = (sizes > 0) & (sizes <= tol.BUBBLE_FACES) & ~spoiled
+    if not candidate.any():
+        return np.zeros(len(faces), bool)
+    # A piece with an open edge (on the box: one inside is not made) is
+    # not closed (counted only when a small piece is left to judge).
+    # Each undirected edge as one integer key (lower end * n + upper end):
+    # a 1-d unique is some 12 times faster than unique rows (axis=0).
+    key, count = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
+    np.logical_or.at(spoiled, label[key[count == 1] // n], True)
+    candidate &= ~spoiled
     if not candidate.any():
         return np.zeros(len(faces), bool)
     # Thickness of every piece at once: the smallest eigenvalue of its
