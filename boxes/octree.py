@@ -176,14 +176,21 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     inside = np.zeros(len(corner), bool)
     if len(corner) == 0 or len(regions) == 0:
         return meets, inside
-    # Only pairs whose centres are within reach (max norm, per axis) can
-    # meet: found by a k-d tree, not a (boxes x regions) table, then the
-    # exact closed-box tests on those pairs alone.
-    reach = (0.5 * size * cell + 0.5 * (regions[:, 1] - regions[:, 0]).max(axis=0) + pad) * (1 + 1e-6)
-    reach = np.maximum(reach, 1e-300)
-    pairs = cKDTree((lo + hi) / 2 / reach).sparse_distance_matrix(
-        cKDTree(regions.mean(axis=1) / reach), 1.0, p=np.inf, output_type="ndarray")
-    owner, reg = pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)
+    # Only pairs of a box and a region near it can meet: the boxes of the
+    # level's lattice within a box of each region, looked up by key; or
+    # (regions spanning many boxes) the pairs whose centres are within reach
+    # (max norm, per axis), found by a k-d tree.  Either way a superset, not
+    # a (boxes x regions) table, then the exact closed-box tests on those
+    # pairs alone.
+    found = _near_pairs(box, level, corner // size, regions, size * cell)
+    if found is not None:
+        owner, reg = found
+    else:
+        reach = (0.5 * size * cell + 0.5 * (regions[:, 1] - regions[:, 0]).max(axis=0) + pad) * (1 + 1e-6)
+        reach = np.maximum(reach, 1e-300)
+        pairs = cKDTree((lo + hi) / 2 / reach).sparse_distance_matrix(
+            cKDTree(regions.mean(axis=1) / reach), 1.0, p=np.inf, output_type="ndarray")
+        owner, reg = pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)
     b_lo, b_hi = lo[owner], hi[owner]
     r_lo, r_hi = regions[reg, 0], regions[reg, 1]
     # (The three axes and-ed, not .all(axis=1): a reduction along an axis
@@ -193,6 +200,41 @@ def _relation(box, fine_level, level, corner, regions, rel=1e-9):
     meets[owner[meet[:, 0] & meet[:, 1] & meet[:, 2]]] = True
     inside[owner[within[:, 0] & within[:, 1] & within[:, 2]]] = True
     return meets, inside
+
+
+def _near_pairs(box, level, index, regions, side):
+    """(box, region) pairs of the boxes (``index``: cell at ``level``, (N, 3))
+    lying within one box of a region (closed); None when the regions cover
+    more boxes than are given (the caller's k-d tree is then cheaper).
+
+    Each region's range of lattice cells, widened by one on every side (so
+    that rounding of the division cannot lose a box that touches it), is
+    enumerated and looked up in the sorted keys of the boxes.
+    """
+    if not np.isfinite(regions).all() or len(index) == 0:
+        return None
+    top = (1 << level) - 1
+    first = np.maximum(np.floor((regions[:, 0] - box[:, 0]) / side).astype(np.int64) - 1, 0)
+    last = np.minimum(np.floor((regions[:, 1] - box[:, 0]) / side).astype(np.int64) + 1, top)
+    span = np.maximum(last - first + 1, 0)
+    count = span[:, 0] * span[:, 1] * span[:, 2]
+    total = int(count.sum())
+    if total > 4 * len(index) + 4096:
+        return None
+    reg = np.repeat(np.arange(len(regions)), count)
+    local = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    dy, dz = span[reg, 1], span[reg, 2]
+    cells = first[reg] + np.stack([local // (dy * dz), (local // dz) % dy, local % dz], axis=1)
+    m = np.int64(top + 1)
+    keys = (index[:, 0] * m + index[:, 1]) * m + index[:, 2]
+    order = np.argsort(keys, kind="stable")
+    sorted_keys = keys[order]
+    if (sorted_keys[1:] == sorted_keys[:-1]).any():
+        return None  # (a box given twice: each copy is its own row)
+    q = (cells[:, 0] * m + cells[:, 1]) * m + cells[:, 2]
+    pos = np.minimum(np.searchsorted(sorted_keys, q), len(sorted_keys) - 1)
+    hit = sorted_keys[pos] == q
+    return order[pos[hit]], reg[hit]
 
 
 def _grow(surface, frontier, box, coarse_level, fine_level, keep_splitting=None, stars=None, refine=None,

@@ -506,3 +506,36 @@ def test_analyse_each_is_analyse_per_point():
         assert g[1].basis.tobytes() == want[1].basis.tobytes()
         assert g[1].eigenvalues.tobytes() == want[1].eigenvalues.tobytes()
     assert isinstance(got[-1], Exception)
+
+
+def test_relation_of_boxes_and_regions_is_the_full_table():
+    # Boxes of one level against regions (cubes round points, some on
+    # lattice planes, so that boxes touch them exactly): the lattice lookup
+    # (or the k-d tree, for regions spanning many boxes) finds what the
+    # (boxes x regions) table of closed-box tests finds.
+    from singmesh.boxes.octree import _near_pairs, _relation
+
+    rng = np.random.default_rng(5)
+    lattice_path = 0
+    for _ in range(120):
+        fine = int(rng.integers(4, 9))
+        level = int(rng.integers(2, fine + 1))
+        box = np.sort(rng.uniform(-3, 3, size=(3, 2)), axis=1)
+        size = 1 << (fine - level)
+        index = np.unique(rng.integers(0, 1 << level, size=(int(rng.integers(1, 400)), 3)), axis=0)
+        cell = (box[:, 1] - box[:, 0]) / (1 << fine)
+        k = int(rng.integers(1, 40))
+        pts = box[:, 0] + rng.uniform(0, 1, size=(k, 3)) * (box[:, 1] - box[:, 0])
+        snap = rng.random(k) < 0.4
+        pts[snap] = box[:, 0] + np.round((pts[snap] - box[:, 0]) / cell) * cell
+        half = cell * rng.integers(1, 4, size=(k, 1))
+        regions = np.stack([pts - half, pts + half], axis=1)
+        meets, inside = _relation(box, fine, level, index * size, regions)
+        lo = box[:, 0] + index * size * cell
+        hi = lo + size * cell
+        pad = 1e-9 * size * cell
+        lo, hi, r_lo, r_hi = lo[:, None], hi[:, None], regions[None, :, 0], regions[None, :, 1]
+        assert np.array_equal(meets, ((lo - pad <= r_hi) & (hi + pad >= r_lo)).all(axis=2).any(axis=1))
+        assert np.array_equal(inside, ((lo + pad >= r_lo) & (hi - pad <= r_hi)).all(axis=2).any(axis=1))
+        lattice_path += _near_pairs(box, level, index, regions, size * cell) is not None
+    assert lattice_path > 60
