@@ -122,7 +122,9 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     idx = np.nonzero(used)[0]
     order = np.lexsort((position[idx], cyc))
     idx, cyc = idx[order], cyc[order]
-    uniq_cyc, start = np.unique(cyc, return_index=True)
+    # The first of each run of the (sorted) labels: np.unique's
+    # return_index, without its sort.
+    start = np.flatnonzero(np.r_[True, cyc[1:] != cyc[:-1]]) if len(cyc) else np.zeros(0, np.int64)
     offsets = np.append(start, len(idx))
     return Cycles(box=node_box[idx[start]], offsets=offsets, events=nodes[idx] % n_events,
                   squares=out_square[idx], broken_boxes=broken)
