@@ -215,6 +215,40 @@ def _trace_many(surface: Surface, v: np.ndarray, node: np.ndarray, p: np.ndarray
     return points, ok
 
 
+def _near_nodes(node: np.ndarray, ok: np.ndarray, cyc: np.ndarray, near: np.ndarray, before: list):
+    """For the nodes of one round: which lie within ``near`` of a node an
+    earlier round kept on their cycle (``before[cyc]``), and a test of
+    whether node k lies within ``near[k]`` of node q of its cycle.
+
+    The distances are those of ``_lengths`` of the same differences, all
+    pairs of a cycle in one call.
+    """
+    k_all = np.flatnonzero(ok)
+    near_before = np.zeros(len(node), bool)
+    # Earlier nodes: every (node, earlier node of its cycle) pair.
+    counts = np.array([len(before[j]) for j in cyc[k_all].tolist()], np.int64)
+    if counts.sum():
+        rows = np.repeat(k_all, counts)
+        prev = np.array([s.node for j in cyc[k_all].tolist() for s in before[j]]).reshape(-1, 3)
+        close = _lengths(node[rows] - prev) <= near[rows]
+        near_before[rows[close]] = True
+    # This round: the pairs (k, q) of nodes on one cycle, q before k.
+    same = {}
+    by_cycle: dict = {}
+    for k in k_all.tolist():
+        by_cycle.setdefault(int(cyc[k]), []).append(k)
+    first, second = [], []
+    for ks in by_cycle.values():
+        for i, k in enumerate(ks):
+            first += [k] * i
+            second += ks[:i]
+    if first:
+        first, second = np.array(first, np.int64), np.array(second, np.int64)
+        close = _lengths(node[first] - node[second]) <= near[first]
+        same = dict(zip(zip(first.tolist(), second.tolist()), close.tolist()))
+    return near_before, lambda k, q: same[(k, q)]
+
+
 def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
                         max_directions: int = 2) -> list[list[SkeletonLink]]:
     """:func:`skeleton_links` for many cycles at once.
@@ -258,8 +292,9 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
         cyc = (np.searchsorted(starts, change, side="right") - 1).astype(np.int64)
         idx = (change - starts[cyc]).astype(np.int64)
         if len(cyc):
-            a = np.array([pts[j][i] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
-            b = np.array([pts[j][(i + 1) % sizes[j]] for j, i in zip(cyc.tolist(), idx.tolist())]).reshape(-1, 3)
+            # The link's two cycle vertices, gathered from all cycles' points at once.
+            a = allp[starts[cyc] + idx]
+            b = allp[starts[cyc] + (idx + 1) % sizes[cyc]]
             sq = [jobs[active[j]][2][i] for j, i in zip(cyc.tolist(), idx.tolist())]
             axis = np.array([int(s[0]) for s in sq], np.int64)
             lo = np.array([s[1] for s in sq], float).reshape(-1, 3)
@@ -277,16 +312,22 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
             if ok.any():
                 trace[ok], traced[ok] = _trace_many(surface, v[ok], node[ok], centre[ok])
         found: list[list[SkeletonLink]] = [[] for _ in active]
+        # Whether each node is near a node of an earlier round on its cycle,
+        # and near which nodes of this round on its cycle (the lengths of
+        # the same differences as one by one), for the choice below.
+        if len(cyc):
+            near_before, near_now = _near_nodes(node, ok, cyc, near, [links[c] for c in active])
+        kept: list[list[int]] = [[] for _ in active]
         for k in range(len(cyc)):
             j = int(cyc[k])
             if not ok[k]:
                 continue
             c = active[j]
-            seen = links[c] + found[j]
-            if seen and (_lengths(node[k] - np.array([s.node for s in seen])) <= near[k]).any():
+            if near_before[k] or any(near_now(k, q) for q in kept[j]):
                 continue  # two directions crossing the cycle at one point
             if not traced[k]:
                 continue
+            kept[j].append(k)
             found[j].append(SkeletonLink(after=int(idx[k]), t=float(t[k]), node=node[k].copy(),
                                          trace=trace[k].copy(), direction=vs[j],
                                          vertex=None if vertex[k] < 0 else int(vertex[k])))
