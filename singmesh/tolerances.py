@@ -696,3 +696,8 @@ IMPROVE_CURVE_RINGS = 2
 #: Vertices at most this far (fraction of the box) from a face of the box
 #: lie on it (the crossings there are computed in that plane).
 IMPROVE_ON_BOX = 1e-12
+
+#: Integers and fractions with more digits than this are shown as floats
+#: in reports and messages (1e300 is read exactly: 301 digits); the mesh
+#: uses the exact number.
+DISPLAY_DIGITS = 30
