@@ -86,7 +86,7 @@ def check_defined(surf: Surface, box: np.ndarray) -> None:
     """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
     if surf.undefined_everywhere(box):
         where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
-        raise SurfaceError(f"F = {surf.expr} is undefined everywhere in the box {where} "
+        raise SurfaceError(f"F = {surf} is undefined everywhere in the box {where} "
                            "(e.g. sqrt or log of a negative number)")
 
 
@@ -397,10 +397,10 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
         f = surface(box[:, 0] + grid * (box[:, 1] - box[:, 0]))
     where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
     if np.isnan(f).all():
-        return f"empty mesh: F = {surface.expr} is undefined everywhere in the box {where} (e.g. sqrt or log of a negative number)"
+        return f"empty mesh: F = {surface} is undefined everywhere in the box {where} (e.g. sqrt or log of a negative number)"
     f = f[~np.isnan(f)]
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
-    return f"empty mesh: the surface F = {surface.expr} does not meet the box {where} (F is {sign} there)"
+    return f"empty mesh: the surface F = {surface} does not meet the box {where} (F is {sign} there)"
 
 
 def _fine_for_creases(gap: float, fine_level: int) -> int:

@@ -38,7 +38,7 @@ from singmesh.skeleton.splitting import compose, translate_many
 from .errors import SurfaceError
 from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation, unused_message  # noqa: F401  (X, Y, Z re-exported)
-from .tolerances import CANDIDATE_DUST, MAX_DEGREE, MAX_POWER, ZERO_ULPS
+from .tolerances import CANDIDATE_DUST, DISPLAY_DIGITS, MAX_DEGREE, MAX_POWER, ZERO_ULPS
 
 #: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
 CHILD_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
@@ -653,8 +653,14 @@ class PolynomialSurface(Surface):
         subs = {}
         for r in self.expr.atoms(sympy.Rational):
             text = None if r.q == 1 else _decimal(r)
-            if text is not None:
+            if text is not None and len(text.strip("-").replace(".", "").strip("0")) > DISPLAY_DIGITS:
+                subs[r] = _short_float(r)  # 1 + 1e-300: 301 digits
+            elif text is not None:
                 subs[r] = sympy.Float(text, len(text.strip("-").replace(".", "").lstrip("0")))
+            elif max(abs(int(r.p)), int(r.q)) >= 10 ** DISPLAY_DIGITS:
+                # 1e300 is read as an exact integer of 301 digits: shown
+                # as the float it was typed as (display only).
+                subs[r] = _short_float(r)
         return str(self.expr.xreplace(subs))
 
     def __repr__(self) -> str:
@@ -839,6 +845,15 @@ def _substitute(expr: sympy.Expr, params: Mapping, optional=frozenset()) -> tupl
     if expr.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
         raise SurfaceError("the equation has a NaN or infinite coefficient")
     return expr, values
+
+
+def _short_float(r: sympy.Rational) -> sympy.Float:
+    """The shortest float text of r as a sympy Float of that many digits (15 where r overflows)."""
+    value = float(r)
+    if not np.isfinite(value):
+        return sympy.Float(r, 15)
+    mantissa = repr(value).split("e")[0].lstrip("-")
+    return sympy.Float(repr(value), max(1, len(mantissa.replace(".", "").lstrip("0").rstrip("0") or "0")))
 
 
 def _decimal(r: sympy.Rational) -> str | None:

@@ -577,6 +577,13 @@ CREASE_NEWTON = 30
 #: equations of all the creases meeting there.
 CREASE_CORNER = 1.5
 
+#: A crease trace that comes within this many trace steps of a point of the
+#: same crease traced before stops there ("meet"): it went on through a
+#: corner of its own crease (the rim of Max(|u| + |v|, |w|) turns where the
+#: Abs kink's side edge meets it) and would trace a stretch twice.  Half a
+#: step: a trace's own next vertex is a whole step on.
+CREASE_ONTO = 0.5
+
 #: Ends on the box of two creases closer than this many fine cells are
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
@@ -689,3 +696,8 @@ IMPROVE_CURVE_RINGS = 2
 #: Vertices at most this far (fraction of the box) from a face of the box
 #: lie on it (the crossings there are computed in that plane).
 IMPROVE_ON_BOX = 1e-12
+
+#: Integers and fractions with more digits than this are shown as floats
+#: in reports and messages (1e300 is read exactly: 301 digits); the mesh
+#: uses the exact number.
+DISPLAY_DIGITS = 30

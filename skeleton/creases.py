@@ -151,13 +151,17 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, ne
 
 
 def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float,
-                   max_steps: int, systems: list | None = None, si: int = 0, near=None):
+                   max_steps: int, systems: list | None = None, si: int = 0, near=None,
+                   earlier: cKDTree | None = None):
     """Vertices from x0 along t0 (x0 excluded) and how the trace ended.
 
     ``"box"``: the last vertex is on the box's boundary; ``"closed"``: back
     at x0; ``"end"``: the kink stops being active between the last vertex
     and the point returned as third item; ``"meet"``: the last vertex is
-    where another crease (of ``systems``) meets it; ``"lost"``: Newton lost it.
+    where another crease (of ``systems``) meets it, or where the trace runs
+    onto ``earlier`` (points of this crease traced before: a trace that
+    went on through a corner of its own crease, where the rim of
+    Max(|u| + |v|, |w|) turns); ``"lost"``: Newton lost it.
     """
     pts = [x0]
     t = t0
@@ -199,6 +203,11 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
                 return pts[1:], "meet", None
         if not system.active(y[None])[0]:
             return pts[1:], "end", y
+        if earlier is not None:
+            d, i = earlier.query(y)
+            if d <= tol.CREASE_ONTO * h:
+                pts.append(earlier.data[i].copy())
+                return pts[1:], "meet", None
         if back_at_start(y, pts, h):
             return pts[1:], "closed", None
         t_new = _tangent(system, y)[0]
@@ -319,22 +328,30 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
         samples = samples[np.lexsort(samples.T[::-1])]
         tree = cKDTree(samples)
         covered = np.zeros(len(samples), bool)
+        traced = []  # this crease's lines so far
         for i in range(len(samples)):
             if covered[i]:
                 continue
             x0 = samples[i]
             t0 = _tangent(system, x0)[0]
-            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near)
+            earlier = cKDTree(np.concatenate(traced)) if traced else None
+            fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near, earlier)
             if how_f == "closed":
                 back, how_b, out_b = [], "closed", None
             else:
-                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si, near)
+                back, how_b, out_b = _trace_one_way(system, box, x0, -t0, h, max_steps, systems, si, near,
+                                                    earlier)
+                if how_b == "closed":
+                    # Round the whole loop backwards (the way forwards was
+                    # lost at a corner of the crease): the loop alone.
+                    fwd, how_f, out_f = [], "closed", None
             pts = _no_repeats(np.array(back[::-1] + [x0] + fwd), h)
             for idx in tree.query_ball_point(pts, 1.5 * h):
                 covered[idx] = True
             covered[i] = True
             if len(pts) < 2:
                 continue
+            traced.append(pts)
             lines.append([si, pts, how_f == "closed", [how_b, how_f], [out_b, out_f]])
     return systems, lines
 
@@ -460,12 +477,12 @@ def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
     for k in range(len(lines)):
         for e in (0, 1):
             s, p, closed, how = lines[k]
-            if closed or how[e] != "end":
+            if closed or how[e] not in ("end", "meet"):
                 continue
             x = p[0] if e == 0 else p[-1]
             best = None
             for j, (sj, q, cj, _) in enumerate(lines):
-                if j == k or cj or len(q) < 2:
+                if j == k or len(q) < 2 or (cj and how[e] != "meet"):
                     continue
                 d = np.linalg.norm(q - x, axis=1)
                 i = int(np.argmin(d))
@@ -474,8 +491,12 @@ def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
             if best is None:
                 continue
             _, j, i = best
-            sj, q, _, how_j = lines[j]
+            sj, q, closed_j, how_j = lines[j]
+            if how[e] == "meet" and not closed_j and i in (0, len(q) - 1):
+                continue  # a corner of ends, which _curve_set joins
             z = _corner(systems, sorted({s, sj}), x, h)
+            if z is None and how[e] == "meet":
+                z = x  # the trace's own meeting point
             if z is None:
                 continue
             # This crease ends at z ...
@@ -488,6 +509,19 @@ def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
                     else np.vstack([p, z[None]])
             lines[k] = (s, p, False, (("meet", how[1]) if e == 0 else (how[0], "meet")))
             # ... and the other is cut at z (at its vertex i, or next to it).
+            if closed_j:
+                # A closed crease (the square rim of Max(|x| + |y|, |z|))
+                # is opened at z: one line from z round to z, whose two
+                # ends become the corner with this end.
+                n = len(q)
+                if np.linalg.norm(q[i] - z) < 1e-6 * h:
+                    rest = np.vstack([q[i + 1:], q[:i]])
+                else:
+                    ahead = np.dot(z - q[i], q[(i + 1) % n] - q[i]) > 0
+                    cut = i + 1 if ahead else i
+                    rest = np.vstack([q[cut:], q[:cut]])
+                lines[j] = (sj, np.vstack([z[None], rest, z[None]]), False, ("meet", "meet"))
+                continue
             if i == 0 or i == len(q) - 1:
                 q = q.copy()
                 q[i] = z

@@ -372,3 +372,23 @@ def test_sheets_closer_than_doubles_resolve_are_no_silent_empty_mesh(text, point
         m = singmesh.mesh(text, ((-1.0, 1.0),) * 3, coarse=8, fine=32)
     assert len(m.faces) == 0
     assert not any("no real zero" in note for note in m.notes())
+
+
+@pytest.mark.parametrize("text, shown", [
+    ("x^2 + y^2 + z^2 - 1e300", "1.0e+300"),            # read exactly: an integer of 301 digits
+    ("x^2 + y^2 + z^2 + 10^40", "1.0e+40"),
+    ("x^2 + y^2 + z^2 - 1 - 1e-300", "- 1.0"),          # 1 + 1e-300: a decimal of 301 digits
+])
+def test_huge_numbers_are_shown_short(text, shown):
+    # The warning and the report printed every digit of the exact number.
+    import warnings
+
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        m = singmesh.mesh(text, ((-2.0, 2.0),) * 3, coarse=8, fine=32)
+    lines = [str(w.message) for w in rec] + m.report_text().splitlines()
+    shown_in = [t for t in lines if "x**2" in t]
+    assert shown_in and all(shown in t and len(t) < 160 for t in shown_in), shown_in
+    # The exact number is what was meshed: the unit sphere for the last case.
+    if "1e-300" in text:
+        assert len(m.faces) > 0 and np.abs(np.linalg.norm(m.vertices, axis=1) - 1).max() < 1e-12

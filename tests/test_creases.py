@@ -74,6 +74,24 @@ def _shifted_octahedron(seed):
             np.linalg.solve(r, (OCTA_CORNERS - s).T).T)
 
 
+def _square_prism(seed):
+    """Max(|u| + |v|, |w|) = 0.7 in rotated, shifted coordinates u, v, w: a square prism whose
+    8 corners are where an Abs crease (a side edge) meets the rim of a top or bottom face, a
+    crease of the Max that has corners of its own there.  The rims were traced as closed loops
+    through those corners and the side edges ended beside them, not on them: the corners came out
+    as two vertices each, read as two creases 0 cells apart, which raised the fine level to the
+    limit (2048: 662,502 triangles in 78 s)."""
+    r = _rotation(seed)
+    s = np.random.default_rng(seed).uniform(-0.05, 0.05, 3).round(12)
+    u, v, w = (_lin(row)[:-1] + f" + {c:.12g})" for row, c in zip(r, s))
+    pairs = [(u, f"{v}{t}0.7") for t in "+-"] + [(v, f"{u}{t}0.7") for t in "+-"] + \
+        [(f"{w}{t}0.7", f"{a}*{u} + {b}*{v} - 0.7") for t in "+-" for a in (1, -1) for b in (1, -1)]
+    corners = np.array([[0, a, b] for a in (-0.7, 0.7) for b in (-0.7, 0.7)] +
+                       [[a, 0, b] for a in (-0.7, 0.7) for b in (-0.7, 0.7)])
+    return (f"square-prism-{seed}", f"Max(Abs({u}) + Abs({v}), Abs({w})) - 0.7", 1.1, True, pairs, np.inf,
+            np.linalg.solve(r, (corners - s).T).T)
+
+
 CASES = [
     ("half-ball-max", f"Max({SPH}, z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("half-ball-rfunction", f"{SPH} + z + sqrt({SPH}**2 + z**2)", 1.5, True, [(SPH, "z")], 1.0, None),
@@ -91,6 +109,7 @@ CASES = [
      [(_lin(R[i]), f"{s}{_lin(R[j])}{t}{_lin(R[k])}-1") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
       for s in ("", "-") for t in ("+", "-")], np.inf, np.linalg.solve(R, OCTA_CORNERS.T).T),
     *[_shifted_octahedron(seed) for seed in (21, 39)],
+    _square_prism(17),
     ("upper-half-ball", f"Max({SPH}, -z)", 1.5, True, [(SPH, "z")], 1.0, None),
     ("min-on-x0", f"Min({SPH}, x)", 1.5, False, [(SPH, "x")], 1.0, None),
 ]
@@ -192,6 +211,8 @@ def test_crease_followed_by_edges(case):
         # The report (as the CLI prints it) lists the 12 edges and the corners.
         text = m.report_text()
         assert "creases              12" in text and text.count("corner of creases") == len(corners)
+        # Creases that meet at a corner are not two creases close together.
+        assert m.stats["fine"] == 256, m.stats["crease_gap"]
     # The rest of the mesh is right.
     _check_mesh(m, eq, box, closed)
 
