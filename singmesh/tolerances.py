@@ -584,6 +584,20 @@ CREASE_CORNER = 1.5
 #: step: a trace's own next vertex is a whole step on.
 CREASE_ONTO = 0.5
 
+#: Two crease traces passing closer than this many trace steps, away from
+#: their ends, cross: they are cut there and the crossing is a corner
+#: (two equal cylinders joined by Min cross along a crease with a double
+#: point).  A chord's sagitta is far below it; traces of two creases side
+#: by side are a step or more apart.
+CREASE_CROSS = 0.25
+
+#: A double point of a crease (grad G1 x grad G2 = 0 there) is looked for
+#: only from points where |grad G1 x grad G2| is below this times
+#: (|grad G1| + |grad G2|)^2: a step (4 cells at fine 256) from the double
+#: point of two cylinders of radius 0.45 joined by Min it is 0.1; where
+#: another kink meets this crease, 0.14 (a prism's corner) or more.
+CREASE_DOUBLE_CROSS = 0.12
+
 #: Ends on the box of two creases closer than this many fine cells are
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).

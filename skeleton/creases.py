@@ -383,6 +383,7 @@ def crease_curves(surface: Surface, box, step: float, level: int | None = None) 
                 lines[k][1] = np.vstack([p[:-1] if near else p, x[None]])
     lines = _densify(systems, [(s, p, c, tuple(how)) for s, p, c, how, _ in lines], tol.CREASE_TRACE_STEP)
     lines = _attach_fading_ends(systems, lines, h)
+    lines = _join_crossings(systems, lines, h)
     return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
 
 
@@ -494,13 +495,21 @@ def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
             sj, q, closed_j, how_j = lines[j]
             if how[e] == "meet" and not closed_j and i in (0, len(q) - 1):
                 continue  # a corner of ends, which _curve_set joins
-            z = _corner(systems, sorted({s, sj}), x, h)
+            # One crease run onto itself: where it crosses itself (a
+            # double point), if it has one there.
+            z = _double_point(systems[s], x, h) if s == sj else None
+            if z is None:
+                z = _corner(systems, sorted({s, sj}), x, h)
             if z is None and how[e] == "meet":
                 z = x  # the trace's own meeting point
             if z is None:
                 continue
             # This crease ends at z ...
             p = p.copy()
+            if how[e] == "meet" and np.linalg.norm(x - z) >= tol.CURVE_MERGE * h:
+                # It ran on past its crossing onto the other trace: the
+                # vertices beyond z go.
+                p = _up_to(p[::-1], z, h)[::-1] if e == 0 else _up_to(p, z, h)
             if e == 0:
                 p = np.vstack([z[None], p[1:]]) if np.linalg.norm(p[0] - z) < tol.CURVE_MERGE * h and len(p) > 2 \
                     else np.vstack([z[None], p])
@@ -539,6 +548,194 @@ def _attach_fading_ends(systems: list, lines: list, h: float) -> list:
             lines[j] = (sj, first, False, (how_j[0], "meet"))
             lines.append((sj, second, False, ("meet", how_j[1])))
     return lines
+
+
+def _up_to(p: np.ndarray, z: np.ndarray, h: float) -> np.ndarray:
+    """The polyline p (its last vertices near z) without the vertices at or beyond z.
+
+    Beyond: ahead of z in the direction from the last vertex a step or more
+    before z; at least that vertex and the one before stay.
+    """
+    far = np.nonzero(np.linalg.norm(p - z, axis=1) >= h)[0]
+    r = int(far[-1]) if len(far) else 0
+    d = z - p[r]
+    ahead = (p[r + 1:] - z) @ d > -tol.CURVE_MERGE * h * np.linalg.norm(d)
+    keep = r + 1 + (int(np.argmax(ahead)) if ahead.any() else len(ahead))
+    return p[:max(keep, 2)]
+
+
+def _join_crossings(systems: list, lines: list, h: float) -> list:
+    """Creases that cross with no vertex in common, cut at the crossing, which becomes a corner.
+
+    Where the two operands of a kink are tangent on the surface (two
+    cylinders of one radius joined by Min, the Steinmetz solid), their
+    common zeros have a double point: two loops of one crease cross there,
+    each traced on its own.  Unjoined, the four half-creases near it were
+    taken for creases close together (the fine level raised to its limit)
+    and meshed as two tubes through one point.  The crossing is placed by
+    Gauss-Newton on G1 = G2 = 0 and grad G1 x grad G2 = 0 (a rank drop:
+    :func:`_double_point`); two creases of different kinks crossing, on
+    both kinks' equations (:func:`_corner`).
+    """
+    segments = []  # (line, index of the segment's first vertex)
+    for k, (_, p, closed, _) in enumerate(lines):
+        n = len(p) if closed else len(p) - 1
+        segments += [(k, i) for i in range(n)]
+    if len(segments) < 2:
+        return lines
+
+    def ends_of(k, i):
+        p = lines[k][1]
+        return p[i], p[(i + 1) % len(p)]
+
+    a = np.array([ends_of(k, i)[0] for k, i in segments])
+    b = np.array([ends_of(k, i)[1] for k, i in segments])
+    pairs = cKDTree(0.5 * (a + b)).query_pairs(1.5 * h, output_type="ndarray")
+    found = []
+    for u, v in pairs.tolist():
+        (ku, iu), (kv, iv) = segments[u], segments[v]
+        if ku == kv:
+            n = len(lines[ku][1])
+            gap = abs(iu - iv)
+            gap = min(gap, n - gap) if lines[ku][2] else gap
+            along = gap * float(np.linalg.norm(b[u] - a[u]))
+            if along <= tol.CREASE_CORNER * h + 1e-12:
+                continue  # near each other along one trace
+        x, y, d = _closest(a[u], b[u], a[v], b[v])
+        if d > tol.CREASE_CROSS * h:
+            continue
+        mid = 0.5 * (x + y)
+        # Ends of traces that meet are corners already (_curve_set).
+        if any(not lines[k][2] and min(np.linalg.norm(mid - lines[k][1][0]), np.linalg.norm(mid - lines[k][1][-1]))
+               <= tol.CURVE_MERGE * h for k in (ku, kv)):
+            continue
+        su, sv = lines[ku][0], lines[kv][0]
+        z = _double_point(systems[su], mid, h) if su == sv else _corner(systems, sorted({su, sv}), mid, h)
+        if z is not None and not any(np.linalg.norm(z - f) <= h for f in found):
+            found.append(z)
+    # Traces of one crease that stopped on each other ("meet") near its
+    # double point, without crossing.
+    for k, (sk, p, closed, how) in enumerate(lines):
+        for e in (0, 1):
+            if closed or how[e] != "meet":
+                continue
+            x = p[0] if e == 0 else p[-1]
+            if not any(j != k and sj == sk and np.linalg.norm(q - x, axis=1).min() <= tol.CREASE_CORNER * h
+                       for j, (sj, q, _, _) in enumerate(lines)):
+                continue  # it met another kink's crease (a corner)
+            z = _double_point(systems[sk], x, h)
+            if z is not None and not any(np.linalg.norm(z - f) <= h for f in found):
+                found.append(z)
+    for z in found:
+        lines = _through(systems, lines, z, h)
+    return lines
+
+
+def _through(systems: list, lines: list, z: np.ndarray, h: float) -> list:
+    """The traces near the double point z cut back to a step from it and led into it.
+
+    However the traces ran near the crossing (through it, stopped on each
+    other a little past it, ended on a vertex of the other branch), every
+    vertex within a step of z goes; each stretch left ends at z, joined to
+    it by points of its own branch (Newton on the crease and a plane across
+    the chord, a quarter step apart).
+    """
+    out = []
+    for s, p, closed, how in lines:
+        near = np.linalg.norm(p - z, axis=1) < h
+        beside = not closed and any(how[e] in ("meet", "lost") and np.linalg.norm(p[-e] - z) < 2 * h for e in (0, 1))
+        if not near.any() and not beside:
+            out.append((s, p, closed, how))
+            continue
+        if near.all():
+            continue
+        if closed:
+            # Start the loop at a vertex that stays, just after a cut.
+            start = int(np.nonzero(~near & np.roll(near, 1))[0][0])
+            p, near = np.roll(p, -start, axis=0), np.roll(near, -start)
+            how = ("meet", "meet")
+        # Runs of kept vertices; a run's end next to a cut goes to z.
+        keep = np.nonzero(~near)[0]
+        breaks = np.nonzero(np.diff(keep) > 1)[0]
+        runs = np.split(keep, breaks + 1)
+        for r in runs:
+            q = p[r]
+            if np.linalg.norm(q - z, axis=1).max() < 2 * h:
+                continue  # a stub beside the crossing (a trace that turned there)
+            # Cut ends, and the trace's own ends beside the crossing, go to z.
+            lead0 = r[0] > 0 or closed or (how[0] in ("meet", "lost") and np.linalg.norm(q[0] - z) < 2 * h)
+            lead1 = r[-1] < len(p) - 1 or closed or (how[1] in ("meet", "lost") and np.linalg.norm(q[-1] - z) < 2 * h)
+            if lead0:
+                q = np.vstack([_lead_in(systems[s], q[0], z, h)[::-1], q])
+            if lead1:
+                q = np.vstack([q, _lead_in(systems[s], q[-1], z, h)])
+            out.append((s, q, False, ("meet" if lead0 else how[0], "meet" if lead1 else how[1])))
+    return out
+
+
+def _lead_in(system, v: np.ndarray, z: np.ndarray, h: float) -> np.ndarray:
+    """Points from v (excluded) to z (included) on the crease, a quarter step apart."""
+    n = max(1, int(np.ceil(np.linalg.norm(z - v) / (h / tol.CREASE_TRACE_STEP))))
+    t = np.arange(1, n)[:, None] / n
+    chord = v + t * (z - v)
+    if len(chord):
+        d = (z - v) / np.linalg.norm(z - v)
+        planes = np.hstack([np.tile(d, (len(chord), 1)), (chord @ d)[:, None]])
+        x, ok = _newton(system, chord, 0.5 * np.linalg.norm(z - v) / n, extra=planes)
+        chord = x[ok]
+    return np.vstack([chord, z[None]])
+
+
+def _closest(p0, p1, q0, q1):
+    """The closest points of the segments p0-p1 and q0-q1, and their distance."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a, e, f = d1 @ d1, d2 @ d2, d2 @ r
+    c, b = d1 @ r, d1 @ d2
+    den = a * e - b * b
+    s = np.clip((b * f - c * e) / den, 0.0, 1.0) if den > 1e-300 else 0.0
+    t = np.clip((b * s + f) / e, 0.0, 1.0) if e > 1e-300 else 0.0
+    s = np.clip((b * t - c) / a, 0.0, 1.0) if a > 1e-300 else 0.0
+    x, y = p0 + s * d1, q0 + t * d2
+    return x, y, float(np.linalg.norm(x - y))
+
+
+def _double_point(system, start: np.ndarray, h: float):
+    """Where the common zeros of G1, G2 cross themselves near ``start`` (grad G1 x grad G2 = 0), or None."""
+    x = np.array(start, float)
+    with np.errstate(all="ignore"):
+        # Near a double point grad G1 x grad G2 is small beside the
+        # gradients (one of them may itself go to 0 there: G1 = A - B of
+        # a Min's operands); at a corner with another kink it is not.
+        _, g = system.values(x[None])
+        size = (np.linalg.norm(g[0, 0]) + np.linalg.norm(g[0, 1])) ** 2
+        if not np.linalg.norm(np.cross(g[0, 0], g[0, 1])) <= tol.CREASE_DOUBLE_CROSS * size:
+            return None
+        for _ in range(tol.CREASE_NEWTON):
+            r = _rank_residual(system, x)
+            eps = 1e-7 * max(1.0, float(np.abs(x).max()))
+            jac = np.stack([(_rank_residual(system, x + eps * e) - _rank_residual(system, x - eps * e)) / (2 * eps)
+                            for e in np.eye(3)], 1)
+            if not (np.isfinite(r).all() and np.isfinite(jac).all()):
+                return None
+            step = np.linalg.lstsq(jac, r, rcond=1e-13)[0]
+            x = x - step
+            if np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0)):
+                break
+        v, g = system.values(x[None])
+        rank = _rank_residual(system, x)[2:]
+    size = np.linalg.norm(g[0], axis=1) * max(float(np.abs(x).max()), 1.0)
+    good = np.all(np.abs(v[0]) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300))
+    # grad G1 x grad G2 (scaled by |grad G1| + |grad G2|) vanishes there to
+    # rounding; a corner of the crease (a kink of G1 or G2) is no double point.
+    good &= bool(np.all(np.abs(rank) <= tol.CREASE_RESIDUAL * float(np.linalg.norm(g[0]))))
+    return x if good and np.linalg.norm(x - start) <= h else None
+
+
+def _rank_residual(system, x: np.ndarray) -> np.ndarray:
+    """G1, G2 and grad G1 x grad G2 (scaled to a length) at x: zero at a double point of the crease."""
+    v, g = system.values(x[None])
+    scale = max(float(np.linalg.norm(g[0, 0]) + np.linalg.norm(g[0, 1])), 1e-300)
+    return np.concatenate([v[0], np.cross(g[0, 0], g[0, 1]) / scale])
 
 
 def _faces_hit(points: np.ndarray, box: np.ndarray) -> np.ndarray:

@@ -392,3 +392,37 @@ def test_fading_creases_on_split_planes(eq, pairs, kink):
     assert np.all(cnt[sel][length <= 8 / 64] == 2)
     _check_mesh(m, eq, box, closed=False)
     assert len(np.unique(T)) - len(edges) + len(T) == 1
+
+
+def test_crease_with_a_double_point_where_the_operands_are_tangent():
+    # Two capped cylinders of one radius, joined by Min (the Steinmetz union),
+    # rotated by a float matrix and shifted: the Min's crease, u^2 + v^2 =
+    # v^2 + w^2, is two ellipses crossing at u = w = 0, where both cylinders
+    # touch the plane v = +-r.  Traced as two loops with no common vertex,
+    # their four half-creases there were read as creases 0.6 cells apart:
+    # unrotated, the fine level went to 2048 and the mesh (690,160 triangles,
+    # 637 s) had Euler characteristic 8.  Each crossing is a corner of four.
+    r = _rotation(31)
+    s = np.random.default_rng(31).uniform(-0.05, 0.05, 3).round(12)
+    u, v, w = (_lin(row)[:-1] + f" + {c:.12g})" for row, c in zip(r, s))
+    eq = f"Min(Max({u}**2+{v}**2-0.2, Abs({w})-1), Max({v}**2+{w}**2-0.2, Abs({u})-1))"
+    box = np.array([[-1.3, 1.3]] * 3)
+    m = singmesh.mesh(eq, box=box)
+    _check_mesh(m, eq, box, closed=True)
+    pairs = [(f"{u}**2+{v}**2-0.2", f"{v}**2+{w}**2-0.2")] + \
+        [(f"{u}**2+{v}**2-0.2", f"{w}{t}1") for t in "+-"] + [(f"{v}**2+{w}**2-0.2", f"{u}{t}1") for t in "+-"]
+    V, T = m.vertices, m.faces
+    crease_edges, counts, length = _crease_edges(V, T, pairs, 2.6, 256)
+    samples = crease_points(eq, pairs, box)
+    assert len(samples) > 100
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    # The ellipses' least radius of curvature is r / sqrt(2) (r = sqrt(0.2)).
+    assert d.max() <= float(length.max()) ** 2 / (8 * np.sqrt(0.1)) * 1.01 + 1e-9 * 2.6, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+    # The two crossings are vertices, each on four crease edges.
+    for sign in (1, -1):
+        x = np.linalg.solve(r, np.array([0.0, sign * np.sqrt(0.2), 0.0]) - s)
+        dist = np.linalg.norm(V - x, axis=1)
+        assert dist.min() <= 1e-12 * 2.6, dist.min()
+        k = int(dist.argmin())
+        assert (crease_edges == k).any(axis=1).sum() == 4
