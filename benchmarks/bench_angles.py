@@ -222,10 +222,10 @@ def main(argv=None) -> int:
                   flush=True)
     away = [r for r in rows if "min_away" in r]
     star = [r for r in rows if "min_star" in r]
-    print(f"\n{len(rows)} surfaces; away: min angle {min(r['min_away'] for r in away):.2f} deg, "
+    print(f"\n{len(rows)} surfaces; away: min angle {min((r['min_away'] for r in away), default=float('nan')):.2f} deg, "
           f"{sum(r['min_away'] < 10 for r in away)} with an angle < 10, "
           f"{sum(r['below20'] > 1 for r in away)} with > 1% < 20; "
-          f"stars: min {min(r['min_star'] for r in star):.2f} deg, {sum(r['min_star'] < 1 for r in star)} below 1; "
+          f"stars: min {min((r['min_star'] for r in star), default=float('nan')):.2f} deg, {sum(r['min_star'] < 1 for r in star)} below 1; "
           f"residual max {max(r.get('residual', 0) for r in rows):.1e}")
     return 0
 
