@@ -34,8 +34,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from scipy.spatial import cKDTree
-
 from singmesh import tolerances as tol
 from singmesh.facets.triangulate import edge_keys
 
@@ -181,14 +179,6 @@ class _State:
         near = curve.copy()
         for _ in range(tol.IMPROVE_CURVE_RINGS if curve.any() else 0):
             near[f[_any_corner(near, f)].ravel()] = True
-        if curve.any():
-            # ... but only close to the curve: where its sheets meet at a
-            # small angle its tube is wide, and two edges from the curve
-            # reach a tenth of the box, where the sheets are far apart
-            # (Whitney's umbrella: 0.16% of the angles away from its curve
-            # below 10 degrees with the rings alone, 0.03% so).
-            near &= cKDTree(v[curve]).query(v, distance_upper_bound=tol.IMPROVE_CURVE_REACH * size)[0] <= \
-                tol.IMPROVE_CURVE_REACH * size
         self.near_curve = near
         self.noflip = apex | near
         m = 3 * len(f)

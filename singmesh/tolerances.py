@@ -698,12 +698,6 @@ IMPROVE_LEAN = 0.906
 #: there, and the judge's sample cannot see them apart.
 IMPROVE_CURVE_RINGS = 2
 
-#: ... and of those only the vertices within this fraction of the box of a
-#: curve vertex (5 fine cells at 256): in a wide tube (sheets meeting at a
-#: small angle near a pinch point) the rings reach 0.07 of the box, where
-#: the sheets are far apart; locked there they kept their slivers.
-IMPROVE_CURVE_REACH = 0.02
-
 #: Vertices at most this far (fraction of the box) from a face of the box
 #: lie on it (the crossings there are computed in that plane).
 IMPROVE_ON_BOX = 1e-12
