@@ -245,6 +245,11 @@ class _State:
         self.axis = np.argmax(on, axis=0)
         self.free = ~stay
         self.face = face
+        #: Per vertex, the fraction of the full step (IMPROVE_STEP of its
+        #: edge length) it may take: halved where a move was undone, so
+        #: that the next round tries a shorter one, and back to 1 once a
+        #: move stays.
+        self.scale = np.ones(nv)
 
     # ------------------------------------------------------------ per triangle
     def _faces(self, which=None):
@@ -434,7 +439,7 @@ class _State:
         idx = np.concatenate([idx_free, idx_face])
         step = np.concatenate([step_free, step_face], axis=1)
         length = np.sqrt(_dot(step, step))
-        limit = tol.IMPROVE_STEP * h[idx]
+        limit = tol.IMPROVE_STEP * h[idx] * self.scale[idx]
         step *= np.minimum(1.0, limit / np.maximum(length, 1e-300))
         length = np.minimum(length, limit)
         go = length > 1e-6 * h[idx]
@@ -457,6 +462,7 @@ class _State:
         inside = (q >= box[:, :1] + margin) & (q <= box[:, 1:] - margin)
         ok &= (inside | ~free_axes).all(axis=0)
         rejected = int((~ok).sum())
+        tried = idx.copy()
         keep = np.flatnonzero(ok)
         keep = keep[np.argsort(idx[keep])]  # sorted: undone vertices are found by bisection
         idx, q, new_normal = idx[keep], q[:, keep], new_normal[:, keep]
@@ -472,10 +478,15 @@ class _State:
         P[:, idx], N[:, idx] = q, new_normal
         undone = 0
         # The lean of every touched triangle, then of those at the vertices
-        # moved back alone (the others' did not change).
+        # moved back alone (the others' did not change), until none is
+        # worse.  Each round moves at least one vertex back, so this ends;
+        # a move back can make a neighbour's triangle fold in turn, in a
+        # chain a dozen vertices long among slivers (rotated D5+-: 12
+        # rounds), and undoing every move of the step there instead froze
+        # the whole mesh (no move kept in any round).
         redo = np.arange(len(ft))
         lean = np.empty(len(ft))
-        for _ in range(8):
+        while True:
             fr = ft[redo]
             now = [np.take(P, fr[:, i], axis=1) for i in range(3)]
             ref = sum(np.take(N, fr[:, i], axis=1) for i in range(3))
@@ -491,12 +502,14 @@ class _State:
             was = np.zeros(nv, bool)
             was[back] = True
             redo = np.flatnonzero(_any_corner(was, ft))
-        else:
-            # Still not settled: undo every move of this step.
-            P[:, idx], N[:, idx] = old_p, old_n
-            undone += int(moved.sum())
-            moved[:] = False
         self._faces(touched)  # the triangles at the vertices that moved (and may be back)
+        # A vertex whose move was undone (by Newton's checks or a fold)
+        # tries half the step next round: a whole step towards the centroid
+        # can fold a neighbour where a shorter one is fine (Kummer: a 8.7
+        # degree sliver whose three vertices were moved back in every round).
+        stayed = tried[~moved[tried]]
+        self.scale[stayed] = np.maximum(0.5 * self.scale[stayed], tol.IMPROVE_MIN_SCALE)
+        self.scale[moved] = 1.0
         return int(moved.sum()), rejected + undone, touched
 
 

@@ -649,8 +649,14 @@ SIZING_EDGE_PER_SIDE = 1.6
 #: flips an independent set; the next looks only at the triangles it
 #: changed or left).  Three rounds bring the crossings' slivers to
 #: well-shaped triangles, two leave some (Clebsch: min angle 8 away from
-#: the box); more passes change little (sphere 6.4 -> 27 degrees).
-IMPROVE_ROUNDS = 3
+#: the box); more passes change little (sphere 6.4 -> 27 degrees).  The
+#: rounds stop as soon as no angle is below IMPROVE_ACTIVE_ANGLE, so only
+#: meshes with slivers left take more, and each only at the vertices near
+#: them: Barth's sextic kept a 0.8 degree sliver 0.2 from its nodes after
+#: three (22 after eight), Kummer rotated 11.9 -> 20.7, Clebsch rotated
+#: 18.7 -> 22 (benchmarks/bench_angles.py); the shaping's time on Barth
+#: 0.20 -> 0.26 s.
+IMPROVE_ROUNDS = 8
 IMPROVE_FLIP_PASSES = 2
 
 #: Relaxation moves the vertices of triangles with an angle below this
@@ -670,6 +676,12 @@ IMPROVE_ACTIVE_RINGS = 1
 #: relaxation step: Newton then starts close to the surface (the tangent
 #: plane is off it by ~ curvature x step^2) and cannot reach another sheet.
 IMPROVE_STEP = 0.5
+
+#: A vertex whose move was undone tries half the step in the next round,
+#: down to this fraction of it (then it keeps trying that: a sixteenth of
+#: half an edge still moves a vertex off a sliver's short edge over the
+#: rounds left).
+IMPROVE_MIN_SCALE = 1 / 16
 
 #: Newton steps after a move (quadratic convergence from a start within
 #: a fraction of an edge length of the surface: three reach rounding).
