@@ -538,24 +538,28 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
 def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: int, zipped: set, reach: float):
     """The curve's walk from a rail end's snap ``s`` to the curve end on the box it is fanned to, or None.
 
-    Of the curve ends within ``reach`` of the rail end ``p``, the one whose
-    walk goes over the fewest curve edges the rail's own strip reaches
-    (``zipped``: pairs both ways), then the nearest.  A rail beside a curve
+    The nearest curve end within ``reach`` of the rail end ``p``, unless
+    more than half of its walk goes over curve edges the rail's own strip
+    reaches (``zipped``: pairs both ways): then, of the ends at most twice
+    as far, the one whose walk goes over fewest.  A rail beside a curve
     that runs a few cells from the box over all its length (its trace on
-    a face) has both ends near both curve ends: each of its ends is fanned
-    to the curve end it points to, not back over the rail's own strip.
+    a face, an arc from a face back to it) has both ends near both curve
+    ends: each of its ends is fanned to the curve end it points to, not
+    back over the rail's own strip.
     """
     found = end_tree.query(p, k=min(4, len(box_ends)), distance_upper_bound=reach)
     dist, which = np.atleast_1d(found[0]), np.atleast_1d(found[1])
-    best = None
+    walks = []
     for d, k in zip(dist.tolist(), which.tolist()):
-        if not np.isfinite(d):
-            continue
-        w = walk(s, int(box_ends[k]))
-        over = sum((a, b) in zipped for a, b in zip(w[:-1], w[1:]))
-        if best is None or over < best[0]:
-            best = (over, w)
-    return None if best is None else best[1]
+        if np.isfinite(d):
+            w = walk(s, int(box_ends[k]))
+            walks.append((sum((a, b) in zipped for a, b in zip(w[:-1], w[1:])), d, w))
+    if not walks:
+        return None
+    over, d0, w = walks[0]
+    if 2 * over <= len(w) - 1:
+        return w
+    return min((c for c in walks if c[1] <= 2.0 * d0), key=lambda c: (c[0], c[1]))[2]
 
 
 def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph, closed: bool = False) -> np.ndarray:
