@@ -103,13 +103,17 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     # half-sheet leaves the tube through the box rather than through its
     # side (a curve running a few cells inside a face): away from where
     # the curves meet the box, whose half-sheets end on the box (below).
-    on_box = _faces_of(curves.points, box).any(axis=1)
-    far = np.ones(len(events.point), bool)
-    if on_box.any():
-        # The whole tube's reach there (wider along tangent branches).
-        radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
-        keep_off = (radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL) * cell
-        far = cKDTree(curves.points[on_box]).query(events.point, distance_upper_bound=keep_off)[0] > keep_off
+    # The whole tube's reach there (wider along tangent branches).
+    radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
+    far = face_rail_events(events.point, curves.points, box, cell,
+                           radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL)
+    if len(ends) > 1 and not far.all():
+        # A half-sheet whose trace on a face runs from one curve end to
+        # another inside the tube (a curve that dips a few cells into the
+        # box and comes back out through the same face): that trace is
+        # its rail.
+        every = rails(grouped, links, tube_id, np.ones(len(events.point), bool))
+        far = face_chords(every, events.point, far, curves.points[ends], box, cell)
     # Along creases the rails' snaps never step back (see strip_triangles).
     steady = np.zeros(len(curves.points), bool)
     for c in curves.pieces:
@@ -129,6 +133,54 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
                            steady=steady if steady.any() else None, turns=turns,
                            stub=tol.CURVE_RAIL_STUB * cell)
+
+
+def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarray, cell: float,
+                     keep_off: float) -> np.ndarray:
+    """Which events a rail may follow on the box's faces: (N,) bool.
+
+    Not those within ``keep_off`` cells of a curve's point on the box:
+    there its half-sheets' traces on the face leave the curve's end, and
+    their rails end on the box.  Distances are in cells along each axis
+    (the tube's own measure: the cells of a box are not cubes; in the
+    largest cell, a curve 6 x-cells from a face along 20 y-cells was all
+    within reach of its ends).
+    """
+    on_box = _faces_of(curve_points, box).any(axis=1)
+    far = np.ones(len(points), bool)
+    if not on_box.any():
+        return far
+    axes = (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
+    d_end = cKDTree(curve_points[on_box] / axes).query(points / axes, distance_upper_bound=keep_off)[0]
+    return d_end > keep_off
+
+
+def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.ndarray, box: np.ndarray,
+                cell: float) -> np.ndarray:
+    """``far`` with the events added of face traces from one curve end on the box to another.
+
+    ``rail_list`` are the tube's rails with every face link on them; a run
+    of their events on the box's faces, starting and ending within
+    ``CURVE_FACE_GAP`` cells of two different curve ends, is the whole
+    trace of a half-sheet that lies inside the tube between the curve and
+    the face: it is a rail.
+    """
+    axes = (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
+    tree = cKDTree(end_points / axes)
+    out = far.copy()
+    for ev, closed in rail_list:
+        if closed or len(ev) < 2:
+            continue
+        run = _faces_of(points[ev], box).any(axis=1)
+        # Maximal runs of consecutive such events.
+        edges = np.diff(np.concatenate([[0], run.astype(np.int8), [0]]))
+        for a, b in zip(np.nonzero(edges == 1)[0].tolist(), np.nonzero(edges == -1)[0].tolist()):
+            if b - a < 2:
+                continue
+            d, k = tree.query(points[ev[[a, b - 1]]] / axes)
+            if k[0] != k[1] and d.max() <= tol.CURVE_FACE_GAP:
+                out[ev[a:b]] = True
+    return out
 
 
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
@@ -426,9 +478,11 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         snap = _no_zigzags(snap, g, turns)
         m = len(events)
         steps = m if closed else m - 1
+        zipped = set()  # the curve edges this rail's strip reaches
         for i in range(steps):
             j = (i + 1) % m
             w = walk(int(snap[i]), int(snap[j]))
+            zipped.update(zip(w[:-1], w[1:]))
             ri, rj = ("e", int(events[i])), ("e", int(events[j]))
             k = len(w) - 1
             if k == 0:
@@ -445,12 +499,14 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
             continue
         # The rail's ends lie on the box: the strip reaches the curve's end
         # there (the cap edge from the rail's end to it is on the box).
+        zipped |= {(b, a) for a, b in zipped}
         for end, s in ((0, int(snap[0])), (m - 1, int(snap[-1]))):
-            dist, which = end_tree.query(r[end])
-            if dist > reach or (box is not None and not _on_boundary(r[end], box)):
+            if box is not None and not _on_boundary(r[end], box):
                 continue
-            e = int(box_ends[which])
-            w = walk(s, e)
+            w = _end_walk(walk, end_tree, box_ends, r[end], s, zipped, reach)
+            if w is None:
+                continue
+            e = w[-1]
             re_ = ("e", int(events[end]))
             # Rail end and curve end on two faces of the box (the curve
             # leaves near a box edge): the strip's cap edge turns at the
@@ -476,7 +532,41 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     # Two rails of one half-sheet can snap to the same vertices: a triangle
     # made twice is kept once; one whose corners coincide is dropped.
     good = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2]) & (keys[:, 0] != keys[:, 2])
+    if box is not None:
+        # A triangle with its three corners on one face of the box lies in
+        # the face, not on the surface: a face rail's link next to a curve
+        # end on that face, zipped to the end (fuzz s1-186: 18 of them, two
+        # vertices closer than 1e-9 of the box; 4 without face rails).  The
+        # strip's edge from the end to the rail is then on the box.
+        good &= ~_faces_of(pts, box).all(axis=1).any(axis=1)
     return keys[good], pts[good]
+
+
+def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: int, zipped: set, reach: float):
+    """The curve's walk from a rail end's snap ``s`` to the curve end on the box it is fanned to, or None.
+
+    The nearest curve end within ``reach`` of the rail end ``p``, unless
+    more than half of its walk goes over curve edges the rail's own strip
+    reaches (``zipped``: pairs both ways): then, of the ends at most twice
+    as far, the one whose walk goes over fewest.  A rail beside a curve
+    that runs a few cells from the box over all its length (its trace on
+    a face, an arc from a face back to it) has both ends near both curve
+    ends: each of its ends is fanned to the curve end it points to, not
+    back over the rail's own strip.
+    """
+    found = end_tree.query(p, k=min(4, len(box_ends)), distance_upper_bound=reach)
+    dist, which = np.atleast_1d(found[0]), np.atleast_1d(found[1])
+    walks = []
+    for d, k in zip(dist.tolist(), which.tolist()):
+        if np.isfinite(d):
+            w = walk(s, int(box_ends[k]))
+            walks.append((sum((a, b) in zipped for a, b in zip(w[:-1], w[1:])), d, w))
+    if not walks:
+        return None
+    over, d0, w = walks[0]
+    if 2 * over <= len(w) - 1:
+        return w
+    return min((c for c in walks if c[1] <= 2.0 * d0), key=lambda c: (c[0], c[1]))[2]
 
 
 def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph, closed: bool = False) -> np.ndarray:

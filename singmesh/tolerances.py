@@ -475,6 +475,13 @@ CURVE_TANGENT_RADIUS = 10.0
 #: end on the box, joined to the curve's end.  "There" is the tube's reach
 #: (radius and growth) and this many cells more.
 CURVE_FACE_RAIL = CURVE_TUBE_RADIUS + 1.0
+#: A run of the tube's face links from within this many cells of one
+#: curve end on the box to within it of another is the trace of a
+#: half-sheet between the curve and the face, its rail (fuzz s1-374: an
+#: arc 8.6 cells deep from a face back to it; the end's own square, where
+#: the two sheets' traces cross, holds no link: its events are within a
+#: cell and a half).
+CURVE_FACE_GAP = 2.0
 
 #: Across a curve whose branches are tangent (A_k, k >= 3) the tube
 #: reaches where they are this many cells apart (the tacnode's

@@ -16,7 +16,7 @@ import meshcheck as mc
 from singmesh.facets.triangulate import triangulate_polygons
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.surface import Surface
-from test_curves import BOX1, check_curve_mesh, float_rotated, mesh_quiet
+from test_curves import BOX1, check_curve_mesh, float_rotated, lambdas, mesh_quiet
 
 ROMAN = "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z"
 
@@ -184,3 +184,63 @@ def test_plane_tangent_to_a_hyperboloid_along_two_lines(box):
     # general position in the second (a piece cut off, 19 curve edges
     # with other than 4 triangles).
     check_curve_mesh("(x + y + z - 1/2) (x^2 + y^2 - z^2 - 1/4)", box, 1)
+
+
+def _rotated_circle(seed: int, radius: float, height: float) -> np.ndarray:
+    """The circle x^2 + y^2 = radius^2, z = height, moved as ``float_rotated(text, seed)`` moves the surface.
+
+    ``float_rotated`` composes F with u = Q (p - shift) (test_rounded: the
+    same generator draws Q, then the shift), so a point u of the circle
+    is at p = Q^T u + shift.
+    """
+    rng = np.random.default_rng(seed)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    shift = rng.uniform(-0.3, 0.3, 3)
+    t = np.linspace(0.0, 2.0 * np.pi, 4000)
+    u = np.stack([radius * np.cos(t), radius * np.sin(t), np.full_like(t, height)], axis=1)
+    return u @ q + shift
+
+
+def _every_curve_edge_has(m, n: int) -> list[int]:
+    """The triangle counts of the mesh's curve edges that are not ``n``."""
+    counts = mc.edge_counts(m.faces)
+    return [counts.get((min(a, b), max(a, b)), 0) for c in m.singular_curves
+            for a, b in zip(c.vertices[:-1], c.vertices[1:]) if counts.get((min(a, b), max(a, b)), 0) != n]
+
+
+def test_sphere_times_thin_cylinder_arc_from_a_face_back_to_it():
+    # A sphere times a cylinder of radius 1/4 through it: two double
+    # circles at z = +-sqrt(15)/4, the sheets at 75.5 degrees (float
+    # rotation, seed 5).  The box is a slab 0.6 thick across the top
+    # circle, its face 3.5 of its (thin) cells inside the circle's top:
+    # the double curve is an arc from that face back to it, a few cells
+    # deep, the half-sheet of the cylinder between the arc and the face
+    # all inside the tube (the class of fuzz s1-374).
+    text = float_rotated("(x^2 + y^2 + z^2 - 1) (x^2 + y^2 - 1/16)", 5)
+    circle = _rotated_circle(5, 0.25, np.sqrt(15.0) / 4.0)
+    # The circle is the rotated surface's double curve: F = grad F = 0 (sympy).
+    assert np.abs(lambdas(text)[2](circle)).max() <= 1e-9
+    top = circle[:, 0].max()
+    box = ((top - 0.6, top - 3.5 * 0.6 / 64), (-1.16, 1.34), (-1.41, 1.09))
+    m, _ = check_curve_mesh(text, box, 1, half_sheets=4)
+    assert _every_curve_edge_has(m, 4) == []
+
+
+def test_cone_times_sphere_circle_along_an_edge_of_the_box():
+    # A cone times the unit sphere: double circles of radius 1/sqrt(2) at
+    # z = +-1/sqrt(2), the sheets at right angles (float rotation, seed 6).
+    # The box's edge along y runs beside the upper circle where it is
+    # nearly parallel to that edge, 3 cells inside the face x = x0 and 6
+    # inside z = z1: the circle crosses the box's corner over many cells
+    # within the tube's reach of both faces (the class of fuzz s1-462).
+    s = 1.0 / np.sqrt(2.0)
+    text = float_rotated("(x^2 + y^2 - z^2) (x^2 + y^2 + z^2 - 1)", 6)
+    circle = _rotated_circle(6, s, s)
+    assert np.abs(lambdas(text)[2](circle)).max() <= 1e-9
+    tangent = np.gradient(circle, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    p = circle[np.argmax(tangent @ np.array([0.25, 0.75, 0.25]))]
+    cell = 2.5 / 64
+    box = ((p[0] - 3 * cell, p[0] - 3 * cell + 2.5), (p[1] - 1.25, p[1] + 1.25), (p[2] + 6 * cell - 2.5, p[2] + 6 * cell))
+    m, _ = check_curve_mesh(text, box, 1, half_sheets=4)
+    assert _every_curve_edge_has(m, 4) == []
