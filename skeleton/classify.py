@@ -289,6 +289,8 @@ def analyse_each(s: Surface, points: np.ndarray) -> list:
         return []
     try:
         known = list(zip(s.taylor_each(points), *s.magnitudes_each(points)))
+    except _NOT_A_POINTS_ANSWER:
+        raise
     except Exception:
         # (a point where F has no jet: each point says so on its own)
         known = [None] * len(points)
@@ -298,9 +300,17 @@ def analyse_each(s: Surface, points: np.ndarray) -> list:
         # if) the caller asks for that point.
         try:
             out.append(analyse(s, p, _known=k))
+        except _NOT_A_POINTS_ANSWER:
+            raise
         except Exception as e:
             out.append(e)
     return out
+
+
+#: Errors from outside the computation (a time limit's alarm, which the
+#: gallery raises as a TimeoutError; memory): raised at once, never kept
+#: as a point's answer.
+_NOT_A_POINTS_ANSWER = (OSError, MemoryError)
 
 
 def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,

@@ -508,6 +508,26 @@ def test_analyse_each_is_analyse_per_point():
     assert isinstance(got[-1], Exception)
 
 
+@pytest.mark.parametrize("where", ["taylor_each", "analyse"])
+def test_analyse_each_lets_a_time_limit_through(where, monkeypatch):
+    # The gallery's time limit is an alarm that raises TimeoutError wherever
+    # the work is: in the batch it was kept as a point's answer (or, from
+    # the batched jets, dropped), and the entry ran on past its limit.
+    import singmesh.skeleton.classify as classify
+
+    s = Surface.parse("4(x^2+y^2+z^2) + 16 x y z - 1")
+
+    def alarm(*args, **kwargs):
+        raise TimeoutError("time limit")
+
+    if where == "taylor_each":
+        monkeypatch.setattr(type(s), "taylor_each", alarm)
+    else:
+        monkeypatch.setattr(classify, "analyse", alarm)
+    with pytest.raises(TimeoutError):
+        classify.analyse_each(s, np.array([[0.5, 0.5, -0.5], [0.3, 0.2, 0.1]]))
+
+
 def test_relation_of_boxes_and_regions_is_the_full_table():
     # Boxes of one level against regions (cubes round points, some on
     # lattice planes, so that boxes touch them exactly): the lattice lookup
