@@ -605,6 +605,11 @@ CREASE_CROSS = 0.25
 #: another kink meets this crease, 0.14 (a prism's corner) or more.
 CREASE_DOUBLE_CROSS = 0.12
 
+#: Central-difference step (relative to the point's scale) for the Jacobian
+#: of grad G1 x grad G2 in the search for a crease's double point: G1 and G2
+#: come with exact gradients but not their second derivatives.
+CREASE_DIFF_STEP = 1e-7
+
 #: Ends on the box of two creases closer than this many fine cells are
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).

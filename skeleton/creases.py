@@ -577,34 +577,30 @@ def _join_crossings(systems: list, lines: list, h: float) -> list:
     :func:`_double_point`); two creases of different kinks crossing, on
     both kinks' equations (:func:`_corner`).
     """
-    segments = []  # (line, index of the segment's first vertex)
-    for k, (_, p, closed, _) in enumerate(lines):
-        n = len(p) if closed else len(p) - 1
-        segments += [(k, i) for i in range(n)]
-    if len(segments) < 2:
+    if not lines:
         return lines
-
-    def ends_of(k, i):
-        p = lines[k][1]
-        return p[i], p[(i + 1) % len(p)]
-
-    a = np.array([ends_of(k, i)[0] for k, i in segments])
-    b = np.array([ends_of(k, i)[1] for k, i in segments])
-    pairs = cKDTree(0.5 * (a + b)).query_pairs(1.5 * h, output_type="ndarray")
+    # Every segment of every trace at once: its line, its first vertex's
+    # index, its ends a and b.
+    n_seg = np.array([len(p) if closed else len(p) - 1 for _, p, closed, _ in lines])
+    line = np.repeat(np.arange(len(lines)), n_seg)
+    idx = np.arange(len(line)) - np.repeat(np.cumsum(n_seg) - n_seg, n_seg)
+    a = np.concatenate([p[:n] for (_, p, _, _), n in zip(lines, n_seg)]).reshape(-1, 3)
+    b = np.concatenate([np.roll(p, -1, axis=0)[:n] for (_, p, _, _), n in zip(lines, n_seg)]).reshape(-1, 3)
+    pairs = cKDTree(0.5 * (a + b)).query_pairs(1.5 * h, output_type="ndarray") if len(a) > 1 \
+        else np.zeros((0, 2), np.int64)
+    u, v = pairs[:, 0], pairs[:, 1]
+    # Not two segments near each other along one trace.
+    size = np.array([len(p) for _, p, _, _ in lines])[line[u]]
+    loop = np.array([closed for _, _, closed, _ in lines], bool)[line[u]]
+    gap = np.abs(idx[u] - idx[v])
+    gap = np.where(loop, np.minimum(gap, size - gap), gap)
+    apart = (line[u] != line[v]) | (gap * np.linalg.norm(b[u] - a[u], axis=1) > tol.CREASE_CORNER * h + 1e-12)
+    u, v = u[apart], v[apart]
+    x, y, d = _closest(a[u], b[u], a[v], b[v])
+    close = d <= tol.CREASE_CROSS * h
     found = []
-    for u, v in pairs.tolist():
-        (ku, iu), (kv, iv) = segments[u], segments[v]
-        if ku == kv:
-            n = len(lines[ku][1])
-            gap = abs(iu - iv)
-            gap = min(gap, n - gap) if lines[ku][2] else gap
-            along = gap * float(np.linalg.norm(b[u] - a[u]))
-            if along <= tol.CREASE_CORNER * h + 1e-12:
-                continue  # near each other along one trace
-        x, y, d = _closest(a[u], b[u], a[v], b[v])
-        if d > tol.CREASE_CROSS * h:
-            continue
-        mid = 0.5 * (x + y)
+    for uu, vv, mid in zip(u[close].tolist(), v[close].tolist(), 0.5 * (x[close] + y[close])):
+        ku, kv = int(line[uu]), int(line[vv])
         # Ends of traces that meet are corners already (_curve_set).
         if any(not lines[k][2] and min(np.linalg.norm(mid - lines[k][1][0]), np.linalg.norm(mid - lines[k][1][-1]))
                <= tol.CURVE_MERGE * h for k in (ku, kv)):
@@ -687,16 +683,17 @@ def _lead_in(system, v: np.ndarray, z: np.ndarray, h: float) -> np.ndarray:
 
 
 def _closest(p0, p1, q0, q1):
-    """The closest points of the segments p0-p1 and q0-q1, and their distance."""
+    """The closest points of the segments p0-p1 and q0-q1 (each (k, 3)), and their distances (k,)."""
     d1, d2, r = p1 - p0, q1 - q0, p0 - q0
-    a, e, f = d1 @ d1, d2 @ d2, d2 @ r
-    c, b = d1 @ r, d1 @ d2
-    den = a * e - b * b
-    s = np.clip((b * f - c * e) / den, 0.0, 1.0) if den > 1e-300 else 0.0
-    t = np.clip((b * s + f) / e, 0.0, 1.0) if e > 1e-300 else 0.0
-    s = np.clip((b * t - c) / a, 0.0, 1.0) if a > 1e-300 else 0.0
-    x, y = p0 + s * d1, q0 + t * d2
-    return x, y, float(np.linalg.norm(x - y))
+    a, e, f = (d1 * d1).sum(1), (d2 * d2).sum(1), (d2 * r).sum(1)
+    c, b = (d1 * r).sum(1), (d1 * d2).sum(1)
+    with np.errstate(all="ignore"):
+        den = a * e - b * b
+        s = np.where(den > 1e-300, np.clip((b * f - c * e) / den, 0.0, 1.0), 0.0)
+        t = np.where(e > 1e-300, np.clip((b * s + f) / e, 0.0, 1.0), 0.0)
+        s = np.where(a > 1e-300, np.clip((b * t - c) / a, 0.0, 1.0), 0.0)
+    x, y = p0 + s[:, None] * d1, q0 + t[:, None] * d2
+    return x, y, np.linalg.norm(x - y, axis=1)
 
 
 def _double_point(system, start: np.ndarray, h: float):
@@ -711,10 +708,11 @@ def _double_point(system, start: np.ndarray, h: float):
         if not np.linalg.norm(np.cross(g[0, 0], g[0, 1])) <= tol.CREASE_DOUBLE_CROSS * size:
             return None
         for _ in range(tol.CREASE_NEWTON):
-            r = _rank_residual(system, x)
-            eps = 1e-7 * max(1.0, float(np.abs(x).max()))
-            jac = np.stack([(_rank_residual(system, x + eps * e) - _rank_residual(system, x - eps * e)) / (2 * eps)
-                            for e in np.eye(3)], 1)
+            # The residual at x and at x +- eps along each axis, in one call;
+            # the Jacobian by central differences.
+            eps = tol.CREASE_DIFF_STEP * max(1.0, float(np.abs(x).max()))
+            at = _rank_residual(system, x + eps * np.vstack([np.zeros(3), np.eye(3), -np.eye(3)]))
+            r, jac = at[0], ((at[1:4] - at[4:7]) / (2 * eps)).T
             if not (np.isfinite(r).all() and np.isfinite(jac).all()):
                 return None
             step = np.linalg.lstsq(jac, r, rcond=1e-13)[0]
@@ -722,7 +720,7 @@ def _double_point(system, start: np.ndarray, h: float):
             if np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0)):
                 break
         v, g = system.values(x[None])
-        rank = _rank_residual(system, x)[2:]
+        rank = _rank_residual(system, x[None])[0, 2:]
     size = np.linalg.norm(g[0], axis=1) * max(float(np.abs(x).max()), 1.0)
     good = np.all(np.abs(v[0]) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300))
     # grad G1 x grad G2 (scaled by |grad G1| + |grad G2|) vanishes there to
@@ -732,10 +730,10 @@ def _double_point(system, start: np.ndarray, h: float):
 
 
 def _rank_residual(system, x: np.ndarray) -> np.ndarray:
-    """G1, G2 and grad G1 x grad G2 (scaled to a length) at x: zero at a double point of the crease."""
-    v, g = system.values(x[None])
-    scale = max(float(np.linalg.norm(g[0, 0]) + np.linalg.norm(g[0, 1])), 1e-300)
-    return np.concatenate([v[0], np.cross(g[0, 0], g[0, 1]) / scale])
+    """(k, 5): G1, G2 and grad G1 x grad G2 (scaled to a length) at the points x (k, 3); 0 at a double point."""
+    v, g = system.values(x)
+    scale = np.maximum(np.linalg.norm(g[:, 0], axis=1) + np.linalg.norm(g[:, 1], axis=1), 1e-300)
+    return np.concatenate([v, np.cross(g[:, 0], g[:, 1]) / scale[:, None]], axis=1)
 
 
 def _faces_hit(points: np.ndarray, box: np.ndarray) -> np.ndarray:
