@@ -150,7 +150,7 @@ def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarr
     far = np.ones(len(points), bool)
     if not on_box.any():
         return far
-    axes = (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
+    axes = _axis_cells(box, cell)
     d_end = cKDTree(curve_points[on_box] / axes).query(points / axes, distance_upper_bound=keep_off)[0]
     return d_end > keep_off
 
@@ -165,7 +165,7 @@ def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.n
     trace of a half-sheet that lies inside the tube between the curve and
     the face: it is a rail.
     """
-    axes = (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
+    axes = _axis_cells(box, cell)
     tree = cKDTree(end_points / axes)
     out = far.copy()
     for ev, closed in rail_list:
@@ -764,6 +764,11 @@ def _assemble_chains(rail_list, pairs):
 def _on_boundary(p: np.ndarray, box: np.ndarray) -> bool:
     size = float(np.max(box[:, 1] - box[:, 0]))
     return bool(np.any((np.abs(p - box[:, 0]) <= 1e-9 * size) | (np.abs(p - box[:, 1]) <= 1e-9 * size)))
+
+
+def _axis_cells(box: np.ndarray, cell: float) -> np.ndarray:
+    """(3,) the fine cell's side along each axis, ``cell`` its largest (the cells of a box need not be cubes)."""
+    return (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
 
 
 def _faces_of(p: np.ndarray, box: np.ndarray) -> np.ndarray:
