@@ -38,7 +38,8 @@ class FaceLinks:
     minus, plus : (Q,) int64   leaf on the -n / +n side, or -1
     link_square : (K,) int64   square of each link
     start, end : (K,) int64    events joined, start -> end seen from +n
-    ambiguous : (Q,) bool      squares paired along the boundary (no graph axis)
+    ambiguous : (Q,) bool      squares with events paired along the boundary (no graph
+                               axis; with two events only if asked: :func:`face_links`)
     inconsistent : (Q,) bool   squares whose events could not be paired
     """
 
@@ -97,17 +98,22 @@ def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
     return rows[first], owners[first], sides[first]
 
 
-def graph_modes(surface: Surface, tree: Octree, squares, owner, owner_side) -> np.ndarray:
+def graph_modes(surface: Surface, tree: Octree, squares, owner, owner_side,
+                which: np.ndarray | None = None) -> np.ndarray:
     """0: the face curve is a graph over u; 1: over v; 2: neither is known.
 
     Read from the owner's face by ``surface.face_modes``: on the owners'
     rows of ``tree.data`` (each leaf owns at most one square per face),
-    not on a gathered copy of their data, nor on every leaf.
+    not on a gathered copy of their data, nor on every leaf.  With
+    ``which`` (Q,) bool, only those squares are read; the others get 0.
     """
     mode = np.full(len(squares), 2, np.int64)
+    if which is not None:
+        mode[~which] = 0
     for a in range(3):
         for side in (0, 1):
-            sel = np.nonzero((squares[:, 0] == a) & (owner_side == side))[0]
+            pick = (squares[:, 0] == a) & (owner_side == side)
+            sel = np.nonzero(pick if which is None else pick & which)[0]
             if len(sel) == 0:
                 continue
             mode[sel] = surface.face_modes(tree.data, a, np.full(len(sel), side, np.int64), rows=owner[sel])
@@ -186,7 +192,8 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     return sq[a], start, end, bad
 
 
-def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray | None = None) -> FaceLinks:
+def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray | None = None,
+               two: bool = True) -> FaceLinks:
     """Pair the events on every contact square into oriented links (``tree`` made for ``surface``).
 
     With ``group`` (N,), the box id of every leaf (leaves sharing one are
@@ -195,6 +202,13 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
     links are those on its boundary (:func:`singmesh.facets.cycles.box_links`
     drops the others), and inside a star the cone over its boundary
     replaces the surface.
+
+    The graph axis of a square (``surface.face_modes``) is read only where
+    it can matter: on squares with more than two events, which it pairs,
+    and with ``two`` on those with two as well, whose one link is the same
+    either way but whose ``ambiguous`` flag the tubes' rails read (a link
+    on the domain's boundary across a square with no graph axis may join
+    two sheets).  Without ``two`` such squares are not ``ambiguous``.
     """
     squares, owner, owner_side = contact_squares(tree)
     minus, plus = _sides(tree, squares, owner, owner_side)
@@ -203,8 +217,12 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
         if inner.any():
             keep = ~inner
             squares, owner, owner_side, minus, plus = (a[keep] for a in (squares, owner, owner_side, minus, plus))
-    mode = graph_modes(surface, tree, squares, owner, owner_side)
     inc = square_events(events, squares)
+    # Squares without events (half of them: the leaves' faces the surface
+    # does not cross) have nothing to pair, and those with two (nearly all
+    # the others) one pairing: their modes are read only as asked.
+    counts = np.bincount(inc["sq"], minlength=len(squares))
+    mode = graph_modes(surface, tree, squares, owner, owner_side, which=counts >= (2 if two else 3))
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     # A graph pairing that does not alternate start/end means rounding
     # defeated the sign test: pair those squares along the boundary instead.

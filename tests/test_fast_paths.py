@@ -15,6 +15,7 @@ import pytest
 
 from singmesh import tolerances as tol
 from singmesh.boxes import edges as edges_mod
+from singmesh.boxes import faces as faces_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
 from singmesh.boxes.octree import subdivide
@@ -77,6 +78,24 @@ def test_links_without_inner_squares_are_the_others(tree_of):
     assert np.array_equal(fewer.start, everything.start[kept])
     assert np.array_equal(fewer.end, everything.end[kept])
     assert np.array_equal(fewer.ambiguous, everything.ambiguous[~inner])
+
+
+def test_links_read_graph_axes_only_where_they_pair(tree_of, monkeypatch):
+    """Graph axes read on the squares with events (all with ``two``, more than two without):
+    the links of reading every square's, and its ``ambiguous`` flags on those squares."""
+    surface, tree = tree_of
+    events = compute_events(surface, tree)
+    fast = {two: face_links(surface, tree, events, two=two) for two in (True, False)}
+    plain = faces_mod.graph_modes
+    monkeypatch.setattr(faces_mod, "graph_modes", lambda *args, which=None: plain(*args))
+    every = face_links(surface, tree, events)
+    counts = np.bincount(every.link_square, minlength=len(every.square))  # links per square
+    assert (counts == 1).any()
+    for two, links in fast.items():
+        for name in ("square", "minus", "plus", "link_square", "start", "end", "inconsistent"):
+            assert np.array_equal(getattr(links, name), getattr(every, name)), name
+        read = counts >= (1 if two else 2)
+        assert np.array_equal(links.ambiguous, every.ambiguous & (read | every.inconsistent))
 
 
 def _zero_points_by_unique(surface, tree, corners, uniq):
