@@ -34,12 +34,13 @@ class FaceLinks:
 
     Attributes
     ----------
-    square : (Q, 5) int64      (n, plane, u0, v0, size) of each square
+    square : (Q, 5) int64      (n, plane, u0, v0, size) of each square (every contact
+                               square for tubes, else those with events: :func:`face_links`)
     minus, plus : (Q,) int64   leaf on the -n / +n side, or -1
     link_square : (K,) int64   square of each link
     start, end : (K,) int64    events joined, start -> end seen from +n
     ambiguous : (Q,) bool      squares with events paired along the boundary (no graph
-                               axis; with two events only if asked: :func:`face_links`)
+                               axis; with two events, only for tubes: :func:`face_links`)
     inconsistent : (Q,) bool   squares whose events could not be paired
     """
 
@@ -193,7 +194,7 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
 
 
 def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray | None = None,
-               two: bool = True) -> FaceLinks:
+               tubes: bool = True) -> FaceLinks:
     """Pair the events on every contact square into oriented links (``tree`` made for ``surface``).
 
     With ``group`` (N,), the box id of every leaf (leaves sharing one are
@@ -203,26 +204,34 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
     drops the others), and inside a star the cone over its boundary
     replaces the surface.
 
-    The graph axis of a square (``surface.face_modes``) is read only where
-    it can matter: on squares with more than two events, which it pairs,
-    and with ``two`` on those with two as well, whose one link is the same
-    either way but whose ``ambiguous`` flag the tubes' rails read (a link
-    on the domain's boundary across a square with no graph axis may join
-    two sheets).  Without ``two`` such squares are not ``ambiguous``.
+    ``tubes``: the links are for tubes along curves, which need every
+    square (the leaves' adjacency across them) and the graph axis of the
+    squares with two events (their ``ambiguous`` flag: a link on the
+    domain's boundary across a square with no graph axis may join two
+    sheets).  Without, only the squares with events are kept (half of all
+    squares have none), and the graph axis is read only on squares with
+    more than two, which it pairs: the one link of a square with two
+    events is the same either way (such squares are not ``ambiguous``).
     """
     squares, owner, owner_side = contact_squares(tree)
+    inc = None
+    if not tubes:
+        inc = square_events(events, squares)
+        has = np.bincount(inc["sq"], minlength=len(squares)) > 0
+        squares, owner, owner_side = squares[has], owner[has], owner_side[has]
+        inc = _of_squares(inc, has)
     minus, plus = _sides(tree, squares, owner, owner_side)
     if group is not None:
         inner = (minus >= 0) & (plus >= 0) & (group[np.maximum(minus, 0)] == group[np.maximum(plus, 0)])
         if inner.any():
             keep = ~inner
             squares, owner, owner_side, minus, plus = (a[keep] for a in (squares, owner, owner_side, minus, plus))
-    inc = square_events(events, squares)
-    # Squares without events (half of them: the leaves' faces the surface
-    # does not cross) have nothing to pair, and those with two (nearly all
-    # the others) one pairing: their modes are read only as asked.
+            if inc is not None:
+                inc = _of_squares(inc, keep)
+    if inc is None:
+        inc = square_events(events, squares)
     counts = np.bincount(inc["sq"], minlength=len(squares))
-    mode = graph_modes(surface, tree, squares, owner, owner_side, which=counts >= (2 if two else 3))
+    mode = graph_modes(surface, tree, squares, owner, owner_side, which=counts >= (2 if tubes else 3))
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     # A graph pairing that does not alternate start/end means rounding
     # defeated the sign test: pair those squares along the boundary instead.
@@ -232,6 +241,16 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
+
+
+def _of_squares(inc: dict, keep: np.ndarray) -> dict:
+    """The incidences of :func:`square_events` on the squares ``keep`` (Q,) bool, numbered among
+    those: what it gives for those squares alone (the same incidences in the same order)."""
+    new = np.cumsum(keep) - 1
+    on = keep[inc["sq"]]
+    out = {k: v[on] for k, v in inc.items()}
+    out["sq"] = new[out["sq"]]
+    return out
 
 
 @dataclass

@@ -272,7 +272,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     else:
         cubes = None
         events = compute_events(surf, tree)
-        links = face_links(surf, tree, events, two=bool(len(curves.points)))
+        links = face_links(surf, tree, events, tubes=bool(len(curves.points)))
     first = tree
     for attempt in range(tol.STAR_RETRIES + 1):
         if cubes is not None:
@@ -286,7 +286,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             # No links inside the stars (their cones replace the surface
             # there); the tubes are found from all links.
             links = face_links(surf, tree, events, group=None if len(curves.points) else group,
-                               two=bool(len(curves.points)))
+                               tubes=bool(len(curves.points)))
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id

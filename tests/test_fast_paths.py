@@ -81,21 +81,25 @@ def test_links_without_inner_squares_are_the_others(tree_of):
 
 
 def test_links_read_graph_axes_only_where_they_pair(tree_of, monkeypatch):
-    """Graph axes read on the squares with events (all with ``two``, more than two without):
-    the links of reading every square's, and its ``ambiguous`` flags on those squares."""
+    """Links for tubes read the graph axes of the squares with events; without tubes, only of
+    those with more than two, and only the squares with events are kept: the links of reading
+    every square's axis on every square, and its ``ambiguous`` flags on the squares read."""
     surface, tree = tree_of
     events = compute_events(surface, tree)
-    fast = {two: face_links(surface, tree, events, two=two) for two in (True, False)}
+    fast = {tubes: face_links(surface, tree, events, tubes=tubes) for tubes in (True, False)}
     plain = faces_mod.graph_modes
     monkeypatch.setattr(faces_mod, "graph_modes", lambda *args, which=None: plain(*args))
     every = face_links(surface, tree, events)
     counts = np.bincount(every.link_square, minlength=len(every.square))  # links per square
-    assert (counts == 1).any()
-    for two, links in fast.items():
-        for name in ("square", "minus", "plus", "link_square", "start", "end", "inconsistent"):
-            assert np.array_equal(getattr(links, name), getattr(every, name)), name
-        read = counts >= (1 if two else 2)
-        assert np.array_equal(links.ambiguous, every.ambiguous & (read | every.inconsistent))
+    assert (counts == 1).any() and (counts == 0).any()
+    for tubes, links in fast.items():
+        kept = np.ones(len(counts), bool) if tubes else counts > 0
+        for name in ("square", "minus", "plus", "inconsistent"):
+            assert np.array_equal(getattr(links, name), getattr(every, name)[kept]), name
+        assert np.array_equal(links.link_square, (np.cumsum(kept) - 1)[every.link_square])
+        assert np.array_equal(links.start, every.start) and np.array_equal(links.end, every.end)
+        read = counts >= (1 if tubes else 2)
+        assert np.array_equal(links.ambiguous, (every.ambiguous & (read | every.inconsistent))[kept])
 
 
 def _zero_points_by_unique(surface, tree, corners, uniq):
