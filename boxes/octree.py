@@ -59,7 +59,8 @@ class Octree:
         Lower corner of each leaf in lattice units.
     data : (N, ...) float64
         The surface's bounds ``data`` on each leaf (``Surface.enclose``):
-        for a polynomial its Bernstein tensors.
+        for a polynomial its Bernstein tensors (in a tree from
+        :func:`refine_stars`, :class:`KeptRows`: indexed as the array).
     simple : (N,) bool
         Whether the leaf passed the simplicity test.
     internal : (M,) int64, sorted
@@ -342,22 +343,59 @@ def refine_stars(surface: Surface, tree: Octree, stars: np.ndarray) -> Octree:
         fine_level=tree.fine_level,
         level=np.concatenate([tree.level[stay]] + new_l),
         corner=np.concatenate([tree.corner[stay]] + new_c),
-        data=_concatenate_kept(tree.data, stay, new_d),
+        data=KeptRows(np.asarray(tree.data), stay, new_d),
         simple=np.concatenate([tree.simple[stay] & ~inside[stay]] + new_s),
         internal=np.sort(np.concatenate([tree.internal] + internal)),
     )
 
 
-def _concatenate_kept(data: np.ndarray, keep: np.ndarray, more: list) -> np.ndarray:
-    """``np.concatenate([data[keep]] + more)`` with one copy of the kept
-    rows, not two (the leaves' data can be most of a gigabyte)."""
-    n = int(keep.sum())
-    out = np.empty((n + sum(len(m) for m in more),) + data.shape[1:], data.dtype)
-    np.compress(keep, data, axis=0, out=out[:n])
-    for m in more:
-        out[n:n + len(m)] = m
-        n += len(m)
-    return out
+class KeptRows:
+    """The ``data`` of a tree made from another: rows kept from the other's and new rows after them.
+
+    Stands for ``np.concatenate([data[keep]] + more)`` without copying the
+    kept rows (most of the leaves' data, tens of megabytes on a surface
+    with many stars, copied for the few rows the later stages read): an
+    index whose first entry is an integer array gathers those rows alone;
+    anything else reads the concatenation, made once (``np.asarray``).
+    """
+
+    def __init__(self, data: np.ndarray, keep: np.ndarray, more: list):
+        self._data, self._rows = data, np.flatnonzero(keep)
+        self._more = np.concatenate(more) if more else data[:0]
+        self._whole = None
+        self.shape = (len(self._rows) + len(self._more),) + data.shape[1:]
+        self.dtype, self.ndim = data.dtype, data.ndim
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    @property
+    def nbytes(self) -> int:
+        return int(np.prod(self.shape)) * self.dtype.itemsize
+
+    def __array__(self, dtype=None, copy=None):
+        if self._whole is None:
+            n = len(self._rows)
+            out = np.empty(self.shape, self.dtype)
+            np.take(self._data, self._rows, axis=0, out=out[:n])
+            out[n:] = self._more
+            self._whole = out
+        return self._whole if dtype is None else self._whole.astype(dtype, copy=False)
+
+    def __getitem__(self, index):
+        first, rest = (index[0], index[1:]) if isinstance(index, tuple) else (index, ())
+        if self._whole is None and isinstance(first, (np.ndarray, list)):
+            rows = np.asarray(first)
+            if rows.dtype.kind in "iu" and rows.ndim == 1:
+                n = len(self._rows)
+                rows = np.where(rows < 0, rows + len(self), rows)
+                old = rows < n
+                out = np.empty((len(rows),) + self.shape[1:], self.dtype)
+                out[old] = self._data[self._rows[rows[old]]]
+                out[~old] = self._more[rows[~old] - n]
+                # The other entries index the gathered rows as they would the whole.
+                return out[(np.arange(len(rows)),) + tuple(rest)] if rest else out
+        return np.asarray(self)[index]
 
 
 def subdivide(surface: Surface, box, coarse_level: int, fine_level: int,

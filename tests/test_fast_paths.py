@@ -18,7 +18,7 @@ from singmesh.boxes import edges as edges_mod
 from singmesh.boxes import faces as faces_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
-from singmesh.boxes.octree import subdivide
+from singmesh.boxes.octree import KeptRows, subdivide
 from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
@@ -100,6 +100,30 @@ def test_links_read_graph_axes_only_where_they_pair(tree_of, monkeypatch):
         assert np.array_equal(links.start, every.start) and np.array_equal(links.end, every.end)
         read = counts >= (1 if tubes else 2)
         assert np.array_equal(links.ambiguous, (every.ambiguous & (read | every.inconsistent))[kept])
+
+
+def test_kept_rows_read_as_the_concatenation(tree_of):
+    """A refined tree's data (kept rows of the first tree's and new ones) reads as their copy."""
+    surface, tree = tree_of
+    rng = np.random.default_rng(3)
+    keep = rng.random(len(tree.level)) < 0.7
+    more = [surface.split(tree.data[:3]).reshape((-1,) + tree.data.shape[1:]), tree.data[5:9]]
+    want = np.concatenate([tree.data[keep]] + more)
+    kept = KeptRows(tree.data, keep, more)
+    assert len(kept) == len(want) and kept.shape == want.shape
+    rows = rng.choice(len(want), size=40)
+    rows[:3] = [0, len(want) - 1, -1]
+    side = rng.integers(0, 2, len(rows))
+    for n in range(3):
+        assert np.array_equal(surface.face_modes(kept, n, side, rows=rows), surface.face_modes(want, n, side, rows=rows))
+        if want.ndim == 4:  # Bernstein tensors: the face slices as face_modes takes them
+            index = [rows, slice(None), slice(None), slice(None)]
+            index[1 + n] = np.where(side == 1, want.shape[1 + n] - 1, 0)
+            assert np.array_equal(kept[tuple(index)], want[tuple(index)])
+    assert np.array_equal(kept[rows], want[rows]) and np.array_equal(kept[list(rows)], want[list(rows)])
+    mask = rng.random(len(want)) < 0.5
+    assert np.array_equal(kept[mask], want[mask]) and np.array_equal(kept[2:7], want[2:7])
+    assert np.array_equal(np.asarray(kept), want) and np.array_equal(kept[rows], want[rows])
 
 
 def _zero_points_by_unique(surface, tree, corners, uniq):
