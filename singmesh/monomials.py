@@ -28,9 +28,22 @@ def powers(values: np.ndarray, n: int) -> np.ndarray:
     """``values[:, None] ** arange(n)`` by repeated products (exact for ints)."""
     out = np.empty(values.shape + (n,), dtype=float)
     out[..., 0] = 1.0
+    if values.size <= _FEW_VALUES and n > 1:
+        # Few points (the evaluations at one point): one running product
+        # along the last axis, the same products in the same order in
+        # three calls instead of n.
+        out[..., 1:] = values[..., None]
+        np.multiply.accumulate(out, axis=-1, out=out)
+        return out
     for i in range(1, n):
         out[..., i] = out[..., i - 1] * values
     return out
+
+
+#: Up to this many values :func:`powers` takes a running product along the
+#: powers (its inner loop is that short: slower than a product per power
+#: on long columns, faster where the calls' overhead dominates).
+_FEW_VALUES = 64
 
 
 def evaluate_tensor(coeffs: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -606,3 +606,24 @@ def test_relation_of_boxes_and_regions_is_the_full_table():
         assert np.array_equal(inside, ((lo + pad >= r_lo) & (hi - pad <= r_hi)).all(axis=2).any(axis=1))
         lattice_path += _near_pairs(box, level, index, regions, size * cell) is not None
     assert lattice_path > 60
+
+
+def test_powers_of_few_values_are_the_repeated_products():
+    """The running product of few values (one point's coordinates) has the bits of one product per power."""
+    from singmesh.monomials import _FEW_VALUES, powers
+
+    rng = np.random.default_rng(5)
+    for shape in [(1,), (3,), (2, 3), (_FEW_VALUES,), (_FEW_VALUES + 1,)]:
+        values = rng.standard_normal(shape) * 10.0 ** rng.integers(-8, 8, shape)
+        values.flat[0] = -0.0
+        if values.size > 2:
+            values.flat[1], values.flat[2] = np.inf, np.nan
+        for n in (1, 2, 5, 11):
+            want = np.empty(shape + (n,))
+            want[..., 0] = 1.0
+            for i in range(1, n):
+                want[..., i] = want[..., i - 1] * values
+            with np.errstate(invalid="ignore", over="ignore"):
+                got = powers(values, n)
+            assert got.shape == want.shape
+            assert np.array_equal(got.view(np.int64), want.view(np.int64))
