@@ -306,10 +306,23 @@ class Surface(abc.ABC):
         ``order``, by default :attr:`degree`.
         """
 
+    def value_gradient_each(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`value_gradient` (K,), (K, 3) at each row of ``points`` (K, 3), each as a
+        call at that point alone gives it."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        vg = [self.value_gradient(p) for p in points]
+        return (np.array([f for f, _ in vg], dtype=float).reshape(-1),
+                np.array([g for _, g in vg], dtype=float).reshape(-1, 3))
+
     def taylor_each(self, points) -> np.ndarray:
         """:meth:`taylor` (default order) at each row of ``points`` (K, 3): (K, n+1, n+1, n+1)."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         return np.array([self.taylor(p) for p in points])
+
+    def magnitude_each(self, points) -> np.ndarray:
+        """:meth:`magnitude` (K,) at each row of ``points`` (K, 3), each as a call at that point alone gives it."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        return np.array([self.magnitude(p) for p in points], dtype=float).reshape(-1)
 
     def magnitudes_each(self, points) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`magnitude` (K,) and :meth:`gradient_magnitude` (K, 3) at each row of
@@ -590,6 +603,17 @@ class PolynomialSurface(Surface):
     def taylor_each(self, points) -> np.ndarray:
         """:meth:`Surface.taylor_each`: all the translations in one pass (the bits of each point's own)."""
         return translate_many(self.coeffs, np.asarray(points, dtype=float).reshape(-1, 3), self.degree)
+
+    def value_gradient_each(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`Surface.value_gradient_each` in one call (stacked one-row products)."""
+        f, *g = evaluate_tensors([self.coeffs, *self.gradient_coeffs],
+                                 np.asarray(points, dtype=float).reshape(-1, 3), alone=True)
+        return f, np.stack(g, axis=-1)
+
+    def magnitude_each(self, points) -> np.ndarray:
+        """:meth:`Surface.magnitude_each` in one call (stacked one-row products)."""
+        p = np.abs(np.asarray(points, dtype=float).reshape(-1, 3))
+        return evaluate_tensors([np.abs(self.coeffs)], p, alone=True)[0]
 
     def magnitudes_each(self, points) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`Surface.magnitudes_each` in two calls (stacked one-row products)."""

@@ -114,6 +114,14 @@ def residual(surface: Surface, x: np.ndarray) -> np.ndarray:
     return np.maximum(f, g) / scale
 
 
+def residual_each(surface: Surface, x: np.ndarray) -> np.ndarray:
+    """:func:`residual` at each row of ``x`` (K, 3), each as a call at that point alone gives it."""
+    f, g = surface.value_gradient_each(x)
+    f, g = np.abs(f), np.abs(g).max(axis=-1)
+    scale = np.maximum(surface.magnitude_each(x), surface.scale)
+    return np.maximum(f, g) / scale
+
+
 def centre(surface: Surface, p: np.ndarray, reach: float,
            limit: float, first=None) -> tuple[np.ndarray, SingularityType, Frame]:
     """The centre of the singular point near ``p``, its type and frame.

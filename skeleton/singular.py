@@ -26,7 +26,7 @@ from scipy.sparse.csgraph import connected_components
 from singmesh import tolerances as tol
 from singmesh.surface import CHILD_OFFSETS, Surface
 
-from .centre import centre, residual
+from .centre import centre, residual, residual_each
 from .classify import NotSingularError, analyse_each
 from .points import SingularPoint
 
@@ -218,9 +218,12 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     # The first classification of every other start, in one batch (those
     # in the region of a point found before are not needed).
     first = iter(analyse_each(surface, x[~along]))
+    # ... and their residuals (a node's centre is its start: most points).
+    at_start = iter(residual_each(surface, x[~along]).tolist())
     with np.errstate(all="ignore"):
         for p, on in zip(x, along.tolist()):
             known = None if on else next(first)
+            r_start = None if on else next(at_start)
             if regions and (_lengths(p - np.array([c for c, _ in regions]))
                             <= np.array([r for _, r in regions])).any():
                 continue  # another start in the region of a point already centred
@@ -242,7 +245,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
                 continue
             if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
                 continue
-            r = float(residual(surface, q))
+            r = r_start if q.tobytes() == p.tobytes() else float(residual(surface, q))
             if r > limit:
                 continue
             # Starts of a degenerate point spread over its region (up to

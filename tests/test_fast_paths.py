@@ -24,6 +24,7 @@ from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
 from singmesh.facets.triangulate import (_choose_template, _combos, _template_combos, _template_quality, _triple_keys,
                                         polygon_triangulations, triangle_quality)
+from singmesh.skeleton.centre import residual, residual_each
 from singmesh.surface import Surface
 
 from test_rounded import float_rotated
@@ -522,7 +523,14 @@ def test_each_point_alone_in_one_call(text):
     hess = s.hessian_each(pts)
     taylor = s.taylor_each(pts)
     mag, gmag = s.magnitudes_each(pts)
+    val, grad = s.value_gradient_each(pts)
+    alone = s.magnitude_each(pts)
+    res = residual_each(s, pts)
     for k, p in enumerate(pts):
+        f, g = s.value_gradient(p)
+        assert val[k].tobytes() == np.asarray(f, float).tobytes() and grad[k].tobytes() == g.tobytes()
+        assert alone[k].tobytes() == np.asarray(s.magnitude(p), float).tobytes()
+        assert res[k].tobytes() == np.asarray(residual(s, p), float).tobytes()
         assert hess[k].tobytes() == s.hessian(p).tobytes()
         assert taylor[k].tobytes() == s.taylor(p).tobytes()
         assert mag[k].tobytes() == np.asarray(s.magnitude(p), float).tobytes()
