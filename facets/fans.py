@@ -54,7 +54,7 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
     # a spoke (skeleton link) meets it.
     keys, pts, spokes = [], [], []
     expanded = {}
-    ckeys = [int(k) for k in cycle_keys]
+    ckeys = np.asarray(cycle_keys).tolist()  # Python ints
     nodes_after: dict = {}  # the links ending on a new node, by the cycle link they cut, in order
     for s in links:
         if s.vertex is None:
