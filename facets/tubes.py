@@ -132,7 +132,8 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
                            steady=steady if steady.any() else None, turns=turns,
-                           stub=tol.CURVE_RAIL_STUB * cell)
+                           stub=tol.CURVE_RAIL_STUB * cell,
+                           near=radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL + tol.CURVE_FACE_GAP, cell=cell)
 
 
 def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarray, cell: float,
@@ -405,7 +406,8 @@ def rails(box_links_arrays, links, tube_id: int, face_ok: np.ndarray | None = No
 def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray, curve_points: np.ndarray,
                     curve_edges: np.ndarray, curve_keys: np.ndarray, box_ends: np.ndarray, reach: float,
                     box: np.ndarray | None = None, steady: np.ndarray | None = None,
-                    turns: np.ndarray | None = None, stub: float | None = None):
+                    turns: np.ndarray | None = None, stub: float | None = None, near: float | None = None,
+                    cell: float | None = None):
     """Triangles zipping each rail to the curve.
 
     Parameters
@@ -433,6 +435,11 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         Rails with both ends on one face of the box, this close together,
         are pieces of a longer rail that ran along the face: each is joined
         to the nearest rail end on that face (:func:`_join_stubs`).
+    near, cell : float, optional
+        Rail ends on a face farther than ``near`` cells (``cell`` the
+        largest side) from every curve end on the box are pieces of a
+        half-sheet's trace along the face, joined across it
+        (:func:`_chain_on_faces`; without them, farther than ``reach``).
 
     Returns
     -------
@@ -449,7 +456,7 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     tree = cKDTree(curve_points)
     end_tree = cKDTree(curve_points[box_ends]) if len(box_ends) else None
     if box is not None:
-        rail_list = _chain_on_faces(rail_list, event_points, curve_points[box_ends], reach, box)
+        rail_list = _chain_on_faces(rail_list, event_points, curve_points[box_ends], reach, box, near, cell)
         if stub is not None:
             rail_list = _join_stubs(rail_list, event_points, box, stub)
     tris: list[tuple] = []  # (vertex, vertex, vertex); vertex = ("e", event) or ("c", curve vertex)
@@ -645,7 +652,8 @@ def _no_zigzags(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = None) 
     return snap
 
 
-def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach: float, box: np.ndarray):
+def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach: float, box: np.ndarray,
+                    near: float | None = None, cell: float | None = None):
     """Rails that end on a face of the box away from the curves' ends, joined end to start across it.
 
     A half-sheet that leaves the tube through the box near a curve that
@@ -655,15 +663,30 @@ def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach
     the nearest such rail start on the same face (the chord between them
     lies in the face: an edge on the box), and the two rails become one
     (closed when it is the rail's own start).
+
+    "Away" is farther than ``near`` cells along each axis (``cell`` the
+    largest side; without them, than ``reach``): the ends of the traces of
+    a curve end's half-sheets lie within the tube's reach of it, the rest
+    of a half-sheet's trace along the face does not (a curve running a
+    cell or a few from a face between its ends on two other faces: fuzz
+    s1-746, s1-690).  A rail end is joined only to a start the chord
+    between them goes on to, seen in the face from both: the two half-
+    sheets between such a curve and the face run along it in opposite
+    senses, their pieces side by side.
     """
     open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
     if not open_:
         return rail_list
+    axes = _axis_cells(box, cell) if near is not None and cell is not None else None
 
     def free(p):
         if not _on_boundary(p, box):
             return False
-        return len(ends) == 0 or float(np.linalg.norm(ends - p, axis=1).min()) > reach
+        if len(ends) == 0:
+            return True
+        if axes is None:
+            return float(np.linalg.norm(ends - p, axis=1).min()) > reach
+        return float(np.linalg.norm((ends - p) / axes, axis=1).min()) > near
 
     heads = [k for k in open_ if free(event_points[rail_list[k][0][0]])]
     tails = [k for k in open_ if free(event_points[rail_list[k][0][-1]])]
@@ -674,59 +697,95 @@ def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach
     pairs = []
     for a in tails:
         pa = event_points[rail_list[a][0][-1]]
+        ea = event_points[rail_list[a][0][-min(4, len(rail_list[a][0]))]]
         for b in heads:
             pb = event_points[rail_list[b][0][0]]
-            if (_faces_of(pa, box) & _faces_of(pb, box)).any():
+            eb = event_points[rail_list[b][0][min(4, len(rail_list[b][0])) - 1]]
+            shared = _faces_of(pa, box) & _faces_of(pb, box)
+            if shared.any():
                 d = float(np.linalg.norm(pa - pb))
-                if d <= reach:
+                if d <= reach and (axes is None or _goes_on(pb - pa, pa - ea, eb - pb, shared)):
                     pairs.append((d, a, b))
     return _assemble_chains(rail_list, pairs)
 
 
+def _goes_on(chord: np.ndarray, came: np.ndarray, goes: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether a chord in the faces flagged goes on the way a rail came and the next one goes, seen in the face."""
+    keep = ~faces.reshape(3, 2).any(axis=1)
+    return bool(np.dot(chord[keep], came[keep]) >= 0 and np.dot(chord[keep], goes[keep]) >= 0)
+
+
 def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float):
-    """Short rails with both ends on one face of the box, each joined to the nearest rail end there.
+    """Short rails with both ends on one face of the box, chained to each other and to a rail end there.
 
     Where the tube reaches a face of the box near a curve's end, a
     half-sheet's trace on the tube's side can run along the face (no
     rail there) and come back for a few links: a stub, both of whose ends
     are on the box.  Zipped alone, both its ends are fanned to the curve's
     end, in opposite senses, and the half-sheet's strip is made twice.
-    In turn, each stub continues the rail (not a stub) whose end on the
-    same face is nearest its start, or goes before the one whose start is
-    nearest its end, within ``gap``: the two become one, and the next stub
-    sees the joined rail's ends.
+    A stub's end is joined to the start of another stub or rail on the
+    same face within ``gap``, and a rail's end to a stub's start, nearest
+    pairs first, when the chord between them goes on the way both run
+    there; a chain holds at most one rail that is not a stub (the two
+    sheets through a curve at a small angle leave stubs side by side,
+    interleaved along the face: rotated planes at 5 degrees, seed 4).
     """
     open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
-    stubs = []
+    stubs = set()
     for k in open_:
-        a, b = event_points[rail_list[k][0][0]], event_points[rail_list[k][0][-1]]
-        if (_faces_of(a, box) & _faces_of(b, box)).any() and float(np.linalg.norm(a - b)) <= gap:
-            stubs.append(k)
+        p = event_points[rail_list[k][0]]
+        a, b = p[0], p[-1]
+        if not (_faces_of(a, box) & _faces_of(b, box)).any():
+            continue
+        # Ends close together, or a short run as a whole (rotated planes
+        # at 6 degrees, seed 4: 4 links a little over 3 cells end to end,
+        # its start 0.3 cells from the end of the rail it continues).
+        if float(np.linalg.norm(a - b)) <= gap or float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) <= 2 * gap:
+            stubs.add(k)
     if not stubs:
         return rail_list
-    rails_ = [(np.asarray(ev), closed) for ev, closed in rail_list]
-    gone = set()
-    for k in stubs:
-        ev = rails_[k][0]
-        start, end = event_points[ev[0]], event_points[ev[-1]]
-        best = None
-        for j in open_:
-            if j == k or j in gone or j in stubs:
+    # Each open rail's ends on the box and the way it runs there.
+    tails, heads = {}, {}
+    for k in open_:
+        p = event_points[rail_list[k][0]]
+        m = min(len(p), 4)
+        if _faces_of(p[-1], box).any():
+            tails[k] = (p[-1], p[-1] - p[-m])
+        if _faces_of(p[0], box).any():
+            heads[k] = (p[0], p[m - 1] - p[0])
+    pairs = []
+    for a, (pa, ua) in tails.items():
+        for b, (pb, ub) in heads.items():
+            if a == b or (a not in stubs and b not in stubs) or not (_faces_of(pa, box) & _faces_of(pb, box)).any():
                 continue
-            other = rails_[j][0]
-            # (distance, rail, whether the stub goes after it)
-            for p, q, after in ((event_points[other[-1]], start, True), (event_points[other[0]], end, False)):
-                if (_faces_of(p, box) & _faces_of(q, box)).any():
-                    d = float(np.linalg.norm(p - q))
-                    if d <= gap and (best is None or (d, j) < best[:2]):
-                        best = (d, j, after)
-        if best is None:
+            c = pb - pa
+            d = float(np.linalg.norm(c))
+            if d <= gap and float(np.dot(c, ua)) >= 0 and float(np.dot(c, ub)) >= 0:
+                pairs.append((d, a, b))
+    # Nearest first; a pair that would close a chain on itself or hold two
+    # rails is skipped.
+    comp = {k: k for k in open_}
+
+    def root(k):
+        while comp[k] != k:
+            k = comp[k]
+        return k
+
+    has_rail = {k: k not in stubs for k in open_}
+    keep = []
+    used_tail, used_head = set(), set()
+    for d, a, b in sorted(pairs):
+        if a in used_tail or b in used_head:
             continue
-        _, j, after = best
-        other = rails_[j][0]
-        rails_[j] = (np.concatenate([other, ev]) if after else np.concatenate([ev, other]), False)
-        gone.add(k)
-    return [r for k, r in enumerate(rails_) if k not in gone]
+        ra, rb = root(a), root(b)
+        if ra == rb or (has_rail[ra] and has_rail[rb]):
+            continue
+        comp[rb] = ra
+        has_rail[ra] = has_rail[ra] or has_rail[rb]
+        used_tail.add(a)
+        used_head.add(b)
+        keep.append((d, a, b))
+    return _assemble_chains(rail_list, keep)
 
 
 def _assemble_chains(rail_list, pairs):

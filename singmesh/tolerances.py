@@ -339,6 +339,24 @@ CURVE_NEWTON = 40
 #: as many vertices by Newton on all of them at once.
 CURVE_TRACE_STEP = 4
 
+#: The fractions of a trace step tried in turn where the full step loses
+#: the curve.  Down to a sixteenth (a quarter of a mesh cell): a curve
+#: turning within a cell of the mesh (the bottom of a U, y (1 - 8 z^2) = 1
+#: in a box 4 across at fine 64: fuzz s1-278) is followed round, not lost
+#: with its other arm never traced.
+CURVE_TRACE_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
+#: ... the steps shorter than a quarter only where two sheets cross
+#: transversally: the Hessian's second singular value at least this
+#: fraction of its first (0.9 on that U; 0.05-0.1 where two branches of
+#: fuzz s1-638's double curve pass within a step, which the shorter steps
+#: followed past each other instead of meeting).
+CURVE_TURN_RANK = 0.2
+
+#: A trace closes back at its start only after this many steps' length
+#: (four full steps, as before the shorter steps of CURVE_TRACE_SCALES,
+#: are 4 or more).
+CURVE_CLOSE_STEPS = 3.0
+
 #: A trace shorter than this many steps is not a curve (an isolated point).
 CURVE_MIN_STEPS = 2
 

@@ -407,8 +407,27 @@ def back_at_start(y: np.ndarray, pts: list, h: float) -> bool:
     At the start, or at the first vertex after it: a start Newton left off
     the curve (near a crossing) is never come back to within 0.75 h, and
     the trace went round again and again (two cylinders at fine 256).
+    Only after ``CURVE_CLOSE_STEPS`` steps' length: a trace taking short
+    steps round a tight turn (the bottom of a U a cell across, fuzz
+    s1-278) passes within 0.75 h of its first vertices on the other arm.
     """
-    return len(pts) > 3 and min(np.linalg.norm(y - pts[0]), np.linalg.norm(y - pts[1])) < 0.75 * h
+    if len(pts) <= 3 or min(np.linalg.norm(y - pts[0]), np.linalg.norm(y - pts[1])) >= 0.75 * h:
+        return False
+    q = np.vstack([np.asarray(pts), y[None]])
+    return float(np.linalg.norm(np.diff(q, axis=0), axis=1).sum()) >= tol.CURVE_CLOSE_STEPS * h
+
+
+def _transversal(surface: Surface, x: np.ndarray) -> bool:
+    """Whether two sheets cross transversally at x: the Hessian's two largest singular values comparable.
+
+    There the locus is a smooth curve, and a trace that loses it at a
+    full step is on a tight turn (followed with shorter steps).  Where the
+    sheets are near tangent (two branches of the locus close together, a
+    crossing of curves: fuzz s1-638) or along a cuspidal edge (rank one)
+    it is not.
+    """
+    sv = np.linalg.svd(surface.hessian(x[None])[0], compute_uv=False)
+    return bool(sv[1] >= tol.CURVE_TURN_RANK * sv[0])
 
 
 def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,
@@ -426,7 +445,9 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
     for n in range(max_steps):
         x = pts[-1]
         y = None
-        for scale in (1.0, 0.5, 0.25):
+        for scale in tol.CURVE_TRACE_SCALES:
+            if scale < 0.25 and not _transversal(surface, x):
+                break
             q = x + scale * h * t
             z, ok = _correct_vertex(surface, q[None], t[None], scale * h)
             if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
@@ -491,6 +512,18 @@ def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: floa
         fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
         back, how_b = ([], "closed") if how_f == "closed" else \
             _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
+        # The samples' principal direction is the chord of the arc they
+        # lie on: at a curve's end on the box, off its tangent by half the
+        # arc's turn, Newton across it slides further than the step and
+        # the trace that way is lost at once (fuzz s1-542, s1-746: half
+        # the curve's end an "end of the trace").  It is tried again along
+        # the first step the other way.
+        if how_b == "lost" and not back and fwd:
+            back, how_b = _trace_one_way(surface, box, x0, -_unit(fwd[0] - x0), h, max_steps, earlier,
+                                         earlier_points, earlier_tangents)
+        elif how_f == "lost" and not fwd and back:
+            fwd, how_f = _trace_one_way(surface, box, x0, -_unit(back[0] - x0), h, max_steps, earlier,
+                                        earlier_points, earlier_tangents)
         pts = np.array(back[::-1] + [x0] + fwd)
         if len(pts) < 2:
             # No curve through it (an isolated point's samples): its

@@ -166,6 +166,19 @@ def test_planes_crossing_at_a_small_angle(degrees, seed):
     check_curve_mesh(float_rotated(f"z (z - {s:.15g} x)", seed), BOX1, 1, half_sheets=4)
 
 
+@pytest.mark.parametrize("degrees, seed", [(6, 4), (5, 4)])
+def test_planes_at_a_small_angle_stubs_on_a_face_zip_once(degrees, seed):
+    # Where the wide tube meets the face y = -1 (or y = 1) near the curve's
+    # end, each sheet's trace on the tube's side leaves stubs of a few
+    # links along the face.  At 6 degrees one stub's ends were 3.2 cells
+    # apart (16 curve edges with 6 triangles: its two ends both fanned to
+    # the curve's end); at 5 degrees the two sheets' stubs interleave along
+    # the face and one was joined to the other sheet's rail (45 edges).
+    s = np.tan(np.radians(degrees))
+    m, _ = check_curve_mesh(float_rotated(f"z (z - {s:.15g} x)", seed), BOX1, 1, half_sheets=4)
+    assert _every_curve_edge_has(m, 4) == []
+
+
 def test_large_sphere_cut_by_a_plane_at_a_small_angle():
     # A sphere of radius 6 meets z = 0 at 7 degrees along a circle of
     # radius 0.73: the cap between them is 5 cells high at the default
@@ -173,6 +186,18 @@ def test_large_sphere_cut_by_a_plane_at_a_small_angle():
     t = np.radians(7.0)
     text = float_rotated(f"(x^2 + y^2 + (z + {6 * np.cos(t):.15g})^2 - 36) z", 5)
     check_curve_mesh(text, BOX1, 1, half_sheets=4)
+
+
+def test_wide_cylinder_cut_by_a_plane_at_a_small_angle():
+    # A cylinder of radius 4 (axis x = -4 cos 6deg, y = 0) cut by the plane
+    # x = 0 along the lines y = +-4 sin 6deg = +-0.418, the sheets at 6
+    # degrees (float rotation, seed 3); both lines run from face to face
+    # of the box, where the wide tubes meet it.  On main: edges of more
+    # than two triangles off the curve.
+    t = np.radians(6.0)
+    text = float_rotated(f"((x + {4 * np.cos(t):.15g})^2 + y^2 - 16) x", 3)
+    m, _ = check_curve_mesh(text, BOX1, 1, half_sheets=4)
+    assert _every_curve_edge_has(m, 4) == []
 
 
 @pytest.mark.parametrize("box", [BOX1, ((-1.03, 0.97), (-0.98, 1.01), (-1.011, 0.993))])

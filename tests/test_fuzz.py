@@ -61,6 +61,33 @@ REGRESSIONS = [
     ("s1-638 crossing off the curve",
      "(0.50443749619891*y*z - 2.75237021685692*x*y - 2.2279695506216*x^2 - 2.3657511302834*x + 0.129930238689852)"
      "*(1*z^2 + 4/3*y*z + 1/3*x)", ((-0.5, 0.5), (-1.0, 1.0), (-2.0, 2.0)), 8, 64),
+    # A U-shaped double curve (y (1 - 8 z^2) = 1 in the plane) whose bottom
+    # turns within a cell (radius 1/16, the trace's step 1/4): the trace
+    # was lost there and the other arm never traced (6 triangles on the
+    # traced arm's edges).  Shorter steps follow it round
+    # (skeleton/singular_curves.py _trace_one_way, back_at_start).
+    ("s1-278 a U-turn within a cell", "(1/2*z - 2/7*y - 7*x)*(8*y*z^2 - 1*y + 1)",
+     ((-1.0, 1.0), (-2.0, 2.0), (-1.5, 1.5)), 8, 64),
+    # The trace from a sample on the face x = -1 set out along the
+    # samples' chord, 45 degrees off the curve, and was lost at once: the
+    # curve's end there an "end of the trace" (edges of 8 triangles).  It
+    # now sets out again along its first step the other way.
+    ("s1-542 a trace starting on a face",
+     "(-2.75739675050444*x*y^2 + 1.32011893949751*x^3 - 1.74577391702034*y*z + 0.821208895230908*x*y"
+     " - 2.60263968664138)*(0.0562854465832934*z + 1.30049828584968*y - 1.63876856385203)",
+     ((-1.0, 1.0), (-2.0, 2.0), (-1.0, 1.0)), 8, 64),
+    # Double curves running a cell or a few from a face between their ends
+    # on two other faces: the half-sheets between curve and face leave
+    # pieces of trace on it, side by side in opposite senses; each piece's
+    # ends were fanned to the nearest curve end (edges of 8 and 12
+    # triangles).  They are chained along the face (facets/tubes.py
+    # _chain_on_faces).
+    ("s1-746 a curve along a face",
+     "(-2*y^3 + 4*x^2*z + 3/2*x*z + 1/2)*(1*z + 6/7*y + 8*x - 8/3)",
+     ((-2.0, 2.0), (-0.5, 0.5), (-0.5, 0.5)), 8, 64),
+    ("s1-690 a curve within a cell of a face",
+     "(1*x*y^2 + 6*x^3 + 6/5*x*z + 8/3)*(1.29540471556219*x*z^2 + 1.15441990317525*x^3"
+     " - 0.724212516849265*y^2 - 1.01369146646664*x^2 + 2.51158703842985)", ((-1.0, 1.0),) * 3, 8, 64),
     # The double curve crosses the thin box (y in -0.5 .. 0.5) at a small
     # angle: a piece of 16 cells asked for a 13-cell tube, which filled it
     # and reached both faces (5 open edges, 69 curve edges with other than
