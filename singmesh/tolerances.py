@@ -385,9 +385,12 @@ CURVE_SVD_RTOL = 1e-12
 #: by the plane): across an edge of type A_k the small singular value
 #: falls as the distance to the curve to the power k - 1, and a cut at
 #: CURVE_SVD_RTOL stopped Newton 5e-7 off an A3 isolated line (x^2 + y^4,
-#: fuzz s1-73).  Only exact zeros are dropped: a step that noise blows up
-#: is not kept (the iterate with the least residual is the answer).
-CURVE_SVD_PLANE_RTOL = 0.0
+#: fuzz s1-73).  Here the cut is far below: an A3 line is reached to 1e-10,
+#: a step that noise blows up is not kept (the iterate with the least
+#: residual is the answer).  Not zero: without any cut, steps divided by
+#: rounding-sized singular values left the vertices of a corank-2 curve
+#: (y z^3 + x y^4 along the x-axis, fuzz s1-745) 1e-6 off it.
+CURVE_SVD_PLANE_RTOL = 1e-20
 
 #: A point Newton left with a residual above rounding level is on the
 #: curve only if a Newton step there would remove at least this fraction

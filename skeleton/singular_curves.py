@@ -190,8 +190,9 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     have converged.
 
     With ``polish`` (a vertex of the curve) the steps in the normal plane
-    keep singular values of any size (``CURVE_SVD_PLANE_RTOL``: across an
-    A3 edge the one that matters falls as the square of the distance) and
+    keep singular values down to ``CURVE_SVD_PLANE_RTOL`` of the largest
+    (across an A3 edge the one that matters falls as the square of the
+    distance: ``CURVE_SVD_RTOL`` stopped it 5e-7 off the curve) and
     each point ends at its iterate of least residual (noise may blow up a
     step there).  Without, the cut of ``CURVE_SVD_RTOL`` keeps the steps
     tame where other curves pass near (the search for a crossing of two
