@@ -399,6 +399,24 @@ CURVE_PLACE = 1e-12
 #: small; the one along the curve is left out by the step's plane).
 CURVE_SVD_RTOL = 1e-12
 
+#: ... in the plane normal to the curve (the direction along it left out
+#: by the plane): across an edge of type A_k the small singular value
+#: falls as the distance to the curve to the power k - 1, and a cut at
+#: CURVE_SVD_RTOL stopped Newton 5e-7 off an A3 isolated line (x^2 + y^4,
+#: fuzz s1-73).  Here the cut is far below: an A3 line is reached to 1e-10,
+#: a step that noise blows up is not kept (the iterate with the least
+#: residual is the answer).  Not zero: without any cut, steps divided by
+#: rounding-sized singular values left the vertices of a corank-2 curve
+#: (y z^3 + x y^4 along the x-axis, fuzz s1-745) 1e-6 off it.
+CURVE_SVD_PLANE_RTOL = 1e-20
+
+#: A point Newton left with a residual above rounding level is on the
+#: curve only if a Newton step there would remove at least this fraction
+#: of it (about 1 near the curve, whatever its type; 0 at a minimum of
+#: |F| + |grad F| beside it, in a valley by a degenerate point of the
+#: locus, where the residual stays ~1e-11 a hundredth of the box away).
+CURVE_EXPLAINED = 0.5
+
 #: Newton onto a curve stops when no step is longer than this fraction of
 #: the distance it may move (the points are then at rounding level).
 CURVE_STOP = 1e-13

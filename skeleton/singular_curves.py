@@ -173,7 +173,7 @@ def _vertex_limit(surface: Surface) -> float:
 
 # ---------------------------------------------------------------- tracing
 def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool = False,
-             limit: float | None = None):
+             limit: float | None = None, polish: bool = False):
     """Newton from points q (k, 3) onto the curve, steps orthogonal to ``across`` (k, 3).
 
     A point is accepted (``ok``) with a relative residual below ``limit``
@@ -188,11 +188,21 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
     on its own (as if corrected alone: many independent searches run at
     once give what they give one by one); otherwise all step until all
     have converged.
+
+    With ``polish`` (a vertex of the curve) the steps in the normal plane
+    keep singular values down to ``CURVE_SVD_PLANE_RTOL`` of the largest
+    (across an A3 edge the one that matters falls as the square of the
+    distance: ``CURVE_SVD_RTOL`` stopped it 5e-7 off the curve) and
+    each point ends at its iterate of least residual (noise may blow up a
+    step there).  Without, the cut of ``CURVE_SVD_RTOL`` keeps the steps
+    tame where other curves pass near (the search for a crossing of two
+    cuspidal edges, a meeting point of lost traces).
     """
     x = np.array(q, dtype=float)
     k = len(x)
     hk = np.broadcast_to(np.asarray(h, dtype=float), (k,))
     previous = np.full(k, np.inf)
+    least = x.copy()  # each point's iterate with the least residual
     stalled = np.zeros(k, np.int64)
     if across is not None:
         plane = _normal_plane(np.asarray(across, dtype=float))
@@ -224,7 +234,8 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 # off the tangent, the projection keeps part of that
                 # (Newton then stalls at ~1e-7 on 15-digit input).
                 pl = plane[live]
-                step = np.einsum("kia,ka->ki", pl, _least_squares(j @ pl, r))
+                rtol = tol.CURVE_SVD_PLANE_RTOL if polish else tol.CURVE_SVD_RTOL
+                step = np.einsum("kia,ka->ki", pl, _least_squares(j @ pl, r, rtol=rtol))
             length = np.linalg.norm(step, axis=1, keepdims=True)
             moving = length[:, 0] > tol.CURVE_STOP * hk[live]
             if each:
@@ -247,6 +258,8 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
             # At rounding level the residual stops falling: done there.
             now = norm[best, rows]
             stalled[live] = np.where(now >= 0.9 * previous[live], stalled[live] + 1, 0)
+            better = now < previous[live]
+            least[live[better]] = new[better]
             previous[live] = np.minimum(previous[live], now)
             if each:
                 live = live[stalled[live] < 3]
@@ -262,13 +275,64 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
                 live = live[~same]
                 if not len(live):
                     break  # nothing moves any more
+        if polish:
+            x = least
         ok = np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= hk)
         limit = _limit(surface) if limit is None else limit
         if each:
-            ok[ok] = _rows_eval(lambda y: residual(surface, y), x[ok], True) <= limit
+            res = _rows_eval(lambda y: residual(surface, y), x[ok], True)
         else:
-            ok[ok] = residual(surface, x[ok]) <= limit
+            res = residual(surface, x[ok])
+        ok[ok] = res <= limit
+        # Above rounding level, a residual Newton cannot reduce is a
+        # minimum of F and grad F beside the curve, not a point of it.
+        # Rounding level is measured against F's terms at the point (next
+        # to a degenerate point all of them are tiny, and a residual below
+        # the polynomial's coefficients times 1e-12 may still be all of F:
+        # fuzz s1-72, 0.001 off the curve).
+        from .singular import accept_residual
+
+        # For a vertex (``polish``) held across a direction only: without
+        # one (the meeting point of lost traces, where two cuspidal edges
+        # cross and the locus itself is singular) no Newton step explains
+        # the residual either.
+        check = np.flatnonzero(ok) if polish and across is not None else np.zeros(0, np.int64)
+        if len(check):
+            check = check[_local_residual(surface, x[check], alone) > accept_residual(surface)]
+        if len(check):
+            ok[check] = _explained(surface, x[check], plane[check], alone) >= tol.CURVE_EXPLAINED
     return x, ok
+
+
+def _local_residual(surface: Surface, x: np.ndarray, alone: bool) -> np.ndarray:
+    """max(|F| / |F's terms|, |F_i| / |F_i's terms|) at x (k, 3): 0 at an exact zero, ~eps at rounding level."""
+    f, g = _rows_eval(surface.value_gradient, x, alone)
+    mag, gmag = _rows_eval(lambda y: tuple(np.asarray(m, float) for m in surface.magnitudes_each(y)), x, True)
+    with np.errstate(all="ignore"):
+        rf = np.where(f == 0, 0.0, np.abs(f) / np.maximum(mag, 1e-300))
+        rg = np.where(g == 0, 0.0, np.abs(g) / np.maximum(gmag, 1e-300)).max(axis=1)
+    return np.maximum(rf, rg)
+
+
+def _explained(surface: Surface, x: np.ndarray, plane: np.ndarray, alone: bool) -> np.ndarray:
+    """How much of the residual (F, grad F) at x (k, 3) a Newton step removes: |J s| / |r|.
+
+    Near a point of the curve (of any transversal type) the residual is
+    about J times the offset and the fraction is near 1; at a minimum of
+    the residual beside the curve (a valley where F and grad F are small
+    but not zero: next to a degenerate point of the locus, fuzz s1-73 and
+    s1-377) J^T r = 0 and the fraction is at noise level.
+    """
+    f, g, hh = _rows_eval(surface.jet, x, alone)
+    r = np.concatenate([f[:, None], g], axis=1)
+    j = np.concatenate([g[:, None, :], hh], axis=1)
+    # In the normal plane (``plane``, (k, 3, 2)), no relative cut: across
+    # an A_k edge the singular value that explains the residual is itself
+    # that small.
+    j = j @ plane
+    s = _least_squares(j, r, rtol=0.0)
+    js = np.einsum("kij,kj->ki", j, s)
+    return np.linalg.norm(js, axis=1) / np.maximum(np.linalg.norm(r, axis=1), 1e-300)
 
 
 def _correct_vertex(surface: Surface, q: np.ndarray, across: np.ndarray, h: float):
@@ -280,10 +344,10 @@ def _correct_vertex(surface: Surface, q: np.ndarray, across: np.ndarray, h: floa
     is refused.
     """
     limit = _vertex_limit(surface)
-    x, ok = _correct(surface, q, across, h, limit=limit)
+    x, ok = _correct(surface, q, across, h, limit=limit, polish=True)
     again = ~ok & np.isfinite(x).all(axis=1) & (np.linalg.norm(x - q, axis=1) <= h)
     if again.any():
-        y, good = _correct(surface, x[again], across[again], h, limit=limit)
+        y, good = _correct(surface, x[again], across[again], h, limit=limit, polish=True)
         good &= np.linalg.norm(y - q[again], axis=1) <= h
         x[again] = np.where(good[:, None], y, x[again])
         ok[again] = good
@@ -309,7 +373,8 @@ def _rows_eval(fn, x: np.ndarray, alone: bool):
     return fn(x)
 
 
-def _least_squares(j: np.ndarray, r: np.ndarray, drop_smallest: bool = False) -> np.ndarray:
+def _least_squares(j: np.ndarray, r: np.ndarray, drop_smallest: bool = False,
+                   rtol: float = tol.CURVE_SVD_RTOL) -> np.ndarray:
     """Minimum-norm least-squares steps j^+ r, singular values below ``CURVE_SVD_RTOL`` of the largest dropped.
 
     Near a curve of singular points the Jacobian of (F, grad F) has a
@@ -329,7 +394,7 @@ def _least_squares(j: np.ndarray, r: np.ndarray, drop_smallest: bool = False) ->
         j = np.where(bad[:, None, None], 0.0, j)
         r = np.where(bad[:, None], 0.0, r)
     u, sv, vt = np.linalg.svd(j, full_matrices=False)
-    cut = tol.CURVE_SVD_RTOL * sv[:, :1]
+    cut = rtol * sv[:, :1]
     keep = sv > cut
     if drop_smallest:
         keep[:, -1] = False
@@ -401,6 +466,14 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     return np.clip(z, box[:, 0], box[:, 1])
 
 
+def _exit_beyond(box: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+    """How far beyond y (inside the box) the ray from x through y leaves the box."""
+    d = y - x
+    with np.errstate(all="ignore"):
+        s = np.minimum(np.where(d < 0, (box[:, 0] - x) / d, np.inf), np.where(d > 0, (box[:, 1] - x) / d, np.inf))
+    return float((np.min(s) - 1.0) * np.linalg.norm(d))
+
+
 def back_at_start(y: np.ndarray, pts: list, h: float) -> bool:
     """Whether a trace ``pts`` (its start first) with next vertex ``y`` has come round to its start.
 
@@ -455,7 +528,10 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
                 break
         if y is None:
             return pts[1:], "lost"
-        if not _inside(box, y):
+        if not _inside(box, y) or _exit_beyond(box, x, y) <= tol.CURVE_MERGE * h / max(1, tol.CURVE_TRACE_STEP):
+            # Outside, or so near the face it is heading for that the end
+            # placed on the face would be a hair from it (2.3e-8 of the
+            # box: zero-area triangles between them, fuzz s1-72): the end.
             pts.append(_clip(surface, box, x, y, h))
             return pts[1:], "box"
         if back_at_start(y, pts, h):
@@ -507,8 +583,13 @@ def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: floa
         # first vertex it is corrected to a vertex's, as every other one
         # is (it stayed ~1e-6 of the box off the curve, fuzz s1-72).
         z, ok = _correct_vertex(surface, x0[None], t0[None], h)
-        if ok[0]:
-            x0 = z[0]
+        if not ok[0]:
+            # Not on the curve to a vertex's residual: a sample in a valley
+            # of small F and grad F beside it (by a degenerate point of the
+            # locus, fuzz s1-73), where no trace should start; the curve's
+            # other samples start it.
+            continue
+        x0 = z[0]
         fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
         back, how_b = ([], "closed") if how_f == "closed" else \
             _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
@@ -1475,7 +1556,8 @@ def _type_changes(surface: Surface, a: np.ndarray, b: np.ndarray, names_a: list,
     finite = np.isfinite(out).all(axis=1)
     if finite.any():
         rows = np.nonzero(finite)[0]
-        y, good = _correct(surface, out[rows], t[rows], step, each=True, limit=_vertex_limit(surface))
+        y, good = _correct(surface, out[rows], t[rows], step, each=True, limit=_vertex_limit(surface),
+                           polish=True)
         out[rows] = np.where(good[:, None], y, out[rows])
     # Each point is a vertex of the curve, so it must be on it to rounding:
     # where Newton cannot put it there (next to a point where the locus is
