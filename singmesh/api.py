@@ -21,7 +21,7 @@ from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, poi
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
-from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
+from singmesh.facets.tubes import curve_samples, swallowed, tube_leaves, tube_regions
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -188,8 +188,8 @@ def _one_blas_thread():
 
 
 def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
-          sizing=("uniform", None, None, None), max_memory=None) -> Mesh:
-    """:func:`mesh` itself."""
+          sizing=("uniform", None, None, None), max_memory=None, raises: int = 0) -> Mesh:
+    """:func:`mesh` itself (``raises``: the times ``fine`` was doubled for creases after a first try)."""
     t0 = time.perf_counter()
     if max_memory is not None:
         parse_size(max_memory)  # a bad value is said before the work
@@ -289,6 +289,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id
+            # A piece of the surface between creases all in their tubes
+            # would be lost: the same at a finer lattice, as for creases
+            # too close together.
+            if (len(creases.points) and raises < tol.CREASE_MAX_RAISE and fine_level < tol.MAX_LEVEL
+                    and swallowed(links, group, tube_id)):
+                return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
+                             raises + 1)
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface

@@ -325,6 +325,46 @@ def test_small_closed_crease_raises_the_fine_level():
 N_ROWS = _rotation(23)
 
 
+def _tetrahedron_pairs(rot, a):
+    """The regular tetrahedron Max(L1 + L2 + L3, L1 - L2 - L3, ...) - a of the rotated coordinates,
+    and its 6 edges as pairs of face planes."""
+    L = [_lin(row) for row in rot]
+    faces = [f"{L[0]}+{L[1]}+{L[2]}", f"{L[0]}-{L[1]}-{L[2]}", f"-{L[0]}+{L[1]}-{L[2]}", f"-{L[0]}-{L[1]}+{L[2]}"]
+    eq = "Max({}, {}, {}, {}) - {}".format(*faces, a)
+    pairs = [(f"{faces[i]}-{a}", f"{faces[j]}-{a}") for i in range(4) for j in range(i + 1, 4)]
+    return eq, pairs
+
+
+@pytest.mark.parametrize("shape", ["octahedron", "tetrahedron"])
+def test_faces_narrower_than_the_tubes_raise_the_fine_level(shape):
+    # At coarse = fine = 32 every face of these float-rotated solids is
+    # narrower than the tubes round its sides: the whole surface was
+    # tube, no rail, and the mesh empty (0 triangles, a note blaming
+    # rounding).  The fine level is doubled until a face is not all tube.
+    rot = _rotation(5)
+    if shape == "octahedron":
+        L = [_lin(row) for row in rot]
+        eq = "Abs({}) + Abs({}) + Abs({}) - 0.9".format(*L)
+        pairs = [(L[i], f"{s}{L[j]}{t}{L[k]}-0.9") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
+                 for s in ("", "-") for t in ("+", "-")]
+        corners = np.linalg.solve(rot, 0.9 * OCTA_CORNERS.T).T
+    else:
+        eq, pairs = _tetrahedron_pairs(rot, 0.5)
+        corners = np.linalg.solve(rot, -0.5 * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1.0]]).T).T
+    box = np.array([[-1.2, 1.2]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=32, fine=32)
+    assert len(m.faces) > 0 and m.stats["fine"] > 32
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    assert np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.4
+    crease_edges, counts, _ = _crease_edges(V, T, pairs, 2.4, m.stats["fine"])
+    samples = crease_points(eq, pairs, box, starts=400)
+    assert len(samples) > 20
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 1e-9 * 2.4, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+
+
 _U, _V, _W = (f"({_lin(R[i])}{c:+.10f})" for i, c in enumerate((0.0123456789, -0.0234567891, 0.0345678912)))
 #: The point u = v = w = 0 (where the kinks fade out).
 _FADE = np.linalg.solve(R, -np.array([0.0123456789, -0.0234567891, 0.0345678912]))
