@@ -95,29 +95,6 @@ def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
                         tangent_radius(curves), balls(curves, MEET_KINDS))
 
 
-def swallowed(links, group: np.ndarray, tube_id: int) -> bool:
-    """Whether a piece of the surface lies wholly in the tube: (links between leaves, grouping) -> bool.
-
-    The pieces are the connected sets of leaves joined by the face links.
-    A piece all of whose leaves are tube has no rail, so no strip reaches
-    it and it is lost (an octahedron at fine 32: each face is narrower
-    than the tubes round its three sides): the lattice must be finer.
-    Pieces of at most ``TUBE_LOST_LEAVES`` leaves do not count.
-    """
-    both = (links.minus >= 0) & (links.plus >= 0)
-    a, b = links.minus[both], links.plus[both]
-    used = np.unique(np.concatenate([links.minus, links.plus]))
-    used = used[used >= 0]
-    if len(used) == 0:
-        return False
-    n = len(group)
-    _, comp = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
-    outside = np.zeros(n, bool)
-    outside[comp[used[group[used] != tube_id]]] = True
-    lost = comp[used][~outside[comp[used]]]
-    return bool(len(lost)) and int(np.bincount(lost).max()) > tol.TUBE_LOST_LEAVES
-
-
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
     """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``."""
     ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)

@@ -21,7 +21,7 @@ from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, poi
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
-from singmesh.facets.tubes import curve_samples, swallowed, tube_leaves, tube_regions
+from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -30,7 +30,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .memory import Budget, parse_size
+from .memory import Budget, MemoryBudgetError, parse_size
 from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
@@ -289,13 +289,6 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         tube_id = len(tree.level) + len(points)
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id
-            # A piece of the surface between creases all in their tubes
-            # would be lost: the same at a finer lattice, as for creases
-            # too close together.
-            if (len(creases.points) and raises < tol.CREASE_MAX_RAISE and fine_level < tol.MAX_LEVEL
-                    and swallowed(links, group, tube_id)):
-                return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
-                             raises + 1)
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
         # A star too large for the cone over its boundary to be the surface
@@ -370,6 +363,19 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
              skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
              special_points=special, curve_graph=curve_graph(curves, vkeys, key0))
+    # Creases whose strips failed are meshed again on a finer lattice, as
+    # creases too close together are: a face between creases a few cells
+    # across is all tube, with no rail, and the edges round it lack a
+    # triangle (a truncated cube's corner triangles at fine 64), or the
+    # whole surface is tube and the mesh empty (an octahedron at fine 32).
+    # What is still wrong at the last try is said below.
+    if (len(creases.points) and not locus_curves and raises < tol.CREASE_MAX_RAISE
+            and fine_level < tol.MAX_LEVEL and _strips_failed(m)):
+        try:
+            return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
+                         raises + 1)
+        except MemoryBudgetError:
+            pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
@@ -383,6 +389,32 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _strips_failed(m: Mesh) -> bool:
+    """Whether a crease edge inside the box has another number of triangles than two, or none has any.
+
+    Edges in a face of the box are left out: there a half-sheet may lie
+    in the face itself (a half ball cut by the box at its flat side).
+    """
+    inner = [c for c in m.singular_curves if not _in_box_face(c.points, m.box)]
+    if not inner:
+        return False
+    if not len(m.faces):
+        return True
+    return bool(m.curve_edges_short_of_sheets(lambda p, q: ~_same_face(p, q, m.box)))
+
+
+def _same_face(p: np.ndarray, q: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(k,) bool: the points p[i] and q[i] (k, 3) lie on one face of the box (to 1e-12 of its size)."""
+    tol_ = 1e-12 * float(np.max(box[:, 1] - box[:, 0]))
+    on = [(np.abs(p[:, a] - box[a, s]) <= tol_) & (np.abs(q[:, a] - box[a, s]) <= tol_) for a in range(3) for s in (0, 1)]
+    return np.any(on, axis=0)
+
+
+def _in_box_face(points: np.ndarray, box: np.ndarray) -> bool:
+    """Whether the polyline lies wholly in one face of the box."""
+    return bool(len(points)) and bool(_same_face(points[:1].repeat(len(points), 0), points, box).all())
 
 
 def _skeleton_source(surf: Surface, box: np.ndarray, level: int):

@@ -372,13 +372,6 @@ CURVE_TUBE_GROW = 4.0
 #: joins it (its own polygon and the strip over it would cover it twice).
 TUBE_HOLE_CELLS = 3
 
-#: A piece of the surface (leaves joined by links) wholly in the tubes of
-#: creases is lost, and the fine level is doubled (at most CREASE_MAX_RAISE
-#: times), when it has more than this many leaves: a face of an octahedron
-#: at fine 32 has hundreds; a lone leaf at a corner of four creases (a
-#: tetrahedron's vertex at fine 64) linked only to itself is no face.
-TUBE_LOST_LEAVES = 8
-
 #: Changes of type along a curve are placed to this fraction of a cell.
 CURVE_PLACE = 1e-12
 

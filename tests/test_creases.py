@@ -10,6 +10,8 @@ are vertices, and the mesh is closed (or open only on the box), manifold,
 with vertices on the surface.
 """
 
+import itertools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -323,6 +325,37 @@ def test_small_closed_crease_raises_the_fine_level():
 
 
 N_ROWS = _rotation(23)
+
+
+def test_corner_faces_a_few_cells_across_are_meshed_again_finer():
+    # A cube truncated at its corners, float-rotated: the corner triangles
+    # are 0.71 across, 6 cells from centre to sides at fine = 64.  There
+    # each is all tube, without a rail: the 24 crease edges round them
+    # had one triangle (470 open edges, chi -6).  The mesh sees its crease
+    # edges short of their two triangles and is made again on a finer
+    # lattice.
+    rot = _rotation(1)
+    L = [_lin(row) for row in rot]
+    eq = "Max(Max(Abs({0}), Abs({1}), Abs({2})) - 0.7, Abs({0}) + Abs({1}) + Abs({2}) - 1.6)".format(*L)
+    faces = [f"{s}{L[i]}-0.7" for i in range(3) for s in ("", "-")]
+    cuts = [f"{a}{L[0]}{b}{L[1]}{c}{L[2]}-1.6" for a in ("", "-") for b in "+-" for c in "+-"]
+    pairs = [(f, g) for f, g in itertools.combinations(faces, 2) if f.lstrip("-") != g.lstrip("-")] + [
+        (f, c) for f in faces for c in cuts]
+    box = np.array([[-1.3, 1.3]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=32, fine=64)
+    assert m.stats["fine"] > 64
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    corners = np.array([np.roll([s * 0.7, t * 0.7, r * 0.2], k) for k in range(3)
+                        for s in (-1, 1) for t in (-1, 1) for r in (-1, 1)])
+    corners = np.linalg.solve(rot, corners.T).T
+    assert np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.6
+    crease_edges, counts, length = _crease_edges(V, T, pairs, 2.6, m.stats["fine"])
+    samples = crease_points(eq, pairs, box, starts=1200)
+    assert len(samples) > 100
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 1e-9 * 2.6, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
 
 
 def _tetrahedron_pairs(rot, a):
