@@ -215,8 +215,11 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     creases = crease_curves(surf, b, step=float(cell.max()))
     # Creases closer than a tube's width share one tube and lose the piece
     # of surface between them: the lattice is made finer until they do not.
+    # The fine level asked for (before the retries of a failed crease mesh).
+    asked = fine_level - raises
     gap = crease_gap(creases, b, fine_level)
     raised = _fine_for_creases(gap, fine_level)
+    gap_asked = (gap, fine_level) if raised > fine_level else None  # for a refusal's message
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -261,7 +264,20 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         side = float((b[:, 1] - b[:, 0]).max())
         refine = CurvatureSizing(surf, b, fine_level, chord=levels[2] * side, min_level=levels[1])
     budget = Budget(surf.enclose(b).nbytes, coarse_level, fine_level, max_memory)
-    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine, budget=budget)
+    try:
+        tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine, budget=budget)
+    except MemoryBudgetError as e:
+        if fine_level <= asked:
+            raise
+        # The user's coarse and fine were not what asked for the memory.
+        if gap_asked is not None:
+            why = f"creases {gap_asked[0]:.3g} fine cells apart at fine {1 << gap_asked[1]}"
+            if gap_asked[0] < 1:
+                why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
+                        "are creases 0 apart)")
+        else:
+            why = "crease strips that failed on the coarser lattices"
+        raise MemoryBudgetError(f"{e}; fine was raised from {1 << asked} to {1 << fine_level} for {why}") from None
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):

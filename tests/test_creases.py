@@ -499,3 +499,16 @@ def test_crease_with_a_double_point_where_the_operands_are_tangent():
         assert dist.min() <= 1e-12 * 2.6, dist.min()
         k = int(dist.argmin())
         assert (crease_edges == k).any(axis=1).sum() == 4
+
+
+def test_a_refusal_after_raising_fine_for_creases_says_so():
+    # An L of two boxes joined by Min with coplanar faces: the edges of the
+    # two boxes coincide there, read as creases 0 apart, and fine is
+    # raised to its limit for them.  The memory refusal named only the
+    # user's coarse and fine, which were not what asked for the memory.
+    eq = "Min(Max(Abs(x)-0.8, Abs(y)-0.3, Abs(z)-0.3), Max(Abs(x+0.5)-0.3, Abs(y-0.5)-0.8, Abs(z)-0.3))"
+    with pytest.raises(singmesh.SurfaceError) as e:
+        singmesh.mesh(eq, box=[[-1.2, 1.2]] * 3, coarse=8, fine=16, max_memory="60MB")
+    text = str(e.value)
+    assert "\n" not in text and "over max_memory" in text
+    assert "fine was raised from 16 to 128 for creases 0 fine cells apart" in text and "coplanar faces" in text
