@@ -385,7 +385,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # triangle (a truncated cube's corner triangles at fine 64), or the
     # whole surface is tube and the mesh empty (an octahedron at fine 32).
     # What is still wrong at the last try is said below.
-    if (len(creases.points) and not locus_curves and raises < tol.CREASE_MAX_RAISE
+    if (len(creases.points) and not locus_curves and raises < tol.CREASE_RETRIES
             and fine_level < tol.MAX_LEVEL and _strips_failed(m)):
         try:
             return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,

@@ -512,3 +512,47 @@ def test_a_refusal_after_raising_fine_for_creases_says_so():
     text = str(e.value)
     assert "\n" not in text and "over max_memory" in text
     assert "fine was raised from 16 to 128 for creases 0 fine cells apart" in text and "coplanar faces" in text
+
+
+def test_boxes_with_coplanar_faces_joined_by_min(seed=None):
+    # An L of two boxes, u in [-0.8, 0.8] x [-0.3, 0.3] and [-0.8, -0.2] x
+    # [-0.3, 1.0] (z in [-0.3, 0.3] both), the common way to write it: their
+    # faces u = -0.8, v = -0.3 and w = +-0.3 are coplanar.  There the two
+    # boxes' edges coincide (two kinks along one crease, traced twice: creases
+    # 0 apart, and fine raised to 2048 until memory was refused), and on
+    # the common face plane the Min of the two boxes is tied to rounding, so
+    # the inner kinks of a box seemed active inside a flat face.
+    rot = np.eye(3) if seed is None else _rotation(seed)
+    L = [_lin(row) for row in rot]
+    eq = ("Min(Max(Abs({0})-0.8, Abs({1})-0.3, Abs({2})-0.3), "
+          "Max(Abs({0}+0.5)-0.3, Abs({1}-0.35)-0.65, Abs({2})-0.3))").format(*L)
+    outline = np.array([[-0.8, -0.3], [0.8, -0.3], [0.8, 0.3], [-0.2, 0.3], [-0.2, 1.0], [-0.8, 1.0]])
+    corners = np.array([[a, b, c] for a, b in outline for c in (-0.3, 0.3)])
+    segments = [(np.r_[p, c], np.r_[q, c]) for p, q in zip(outline, np.roll(outline, -1, 0)) for c in (-0.3, 0.3)]
+    segments += [(np.r_[p, -0.3], np.r_[p, 0.3]) for p in outline]
+    planes = [f"{L[0]}+0.8", f"{L[0]}-0.8", f"{L[0]}+0.2", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[1]}-1.0"]
+    pairs = [(a, b) for a, b in itertools.combinations(planes, 2) if a[:len(L[0])] != b[:len(L[0])]]
+    pairs += [(p, f"{L[2]}{s}0.3") for p in planes for s in "+-"]
+    box = np.array([[-1.2, 1.2]] * 3)
+    # (Float-rotated, the creases are still read as too close: fine is
+    # raised to its limit, as before; not yet right.)
+    fine = 64 if seed is None else 256
+    m = singmesh.mesh(eq, box=box, coarse=16 if seed is None else 32, fine=fine)
+    assert m.stats["fine"] == fine
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    x = np.linalg.solve(rot, corners.T).T
+    assert np.linalg.norm(V[None] - x[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.4
+    # Every crease vertex is on an edge of the L (no crease inside a flat face) ...
+    a = np.linalg.solve(rot, np.array([s[0] for s in segments]).T).T
+    b = np.linalg.solve(rot, np.array([s[1] for s in segments]).T).T
+    cp = np.concatenate([c.points for c in m.singular_curves])
+    assert _segment_distance(cp, a, b).max() <= 1e-9 * 2.4
+    # ... and every edge of the L (points found by Newton) is on crease edges with two triangles each.
+    crease_edges, counts, _ = _crease_edges(V, T, pairs, 2.4, fine)
+    samples = crease_points(eq, pairs, box, starts=1500)
+    # (The planes' lines run on through flat faces: the L's edges are the stretches on its outline.)
+    samples = samples[_segment_distance(samples, a, b) <= 1e-12 * 2.4]
+    assert len(samples) > 100
+    assert _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]]).max() <= 1e-9 * 2.4
+    assert np.all(counts == 2), np.bincount(counts)
