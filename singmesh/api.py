@@ -30,7 +30,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
 from .errors import SurfaceError
-from .memory import Budget, parse_size
+from .memory import Budget, MemoryBudgetError, parse_size
 from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
 from .squarefree import squarefree
 from .surface import Surface
@@ -188,8 +188,8 @@ def _one_blas_thread():
 
 
 def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
-          sizing=("uniform", None, None, None), max_memory=None) -> Mesh:
-    """:func:`mesh` itself."""
+          sizing=("uniform", None, None, None), max_memory=None, raises: int = 0) -> Mesh:
+    """:func:`mesh` itself (``raises``: the times ``fine`` was doubled for creases after a first try)."""
     t0 = time.perf_counter()
     if max_memory is not None:
         parse_size(max_memory)  # a bad value is said before the work
@@ -215,8 +215,11 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     creases = crease_curves(surf, b, step=float(cell.max()))
     # Creases closer than a tube's width share one tube and lose the piece
     # of surface between them: the lattice is made finer until they do not.
+    # The fine level asked for (before the retries of a failed crease mesh).
+    asked = fine_level - raises
     gap = crease_gap(creases, b, fine_level)
     raised = _fine_for_creases(gap, fine_level)
+    gap_asked = (gap, fine_level) if raised > fine_level else None  # for a refusal's message
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -261,7 +264,20 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         side = float((b[:, 1] - b[:, 0]).max())
         refine = CurvatureSizing(surf, b, fine_level, chord=levels[2] * side, min_level=levels[1])
     budget = Budget(surf.enclose(b).nbytes, coarse_level, fine_level, max_memory)
-    tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine, budget=budget)
+    try:
+        tree = subdivide(surf, b, coarse_level, fine_level, keep_splitting=keep, refine=refine, budget=budget)
+    except MemoryBudgetError as e:
+        if fine_level <= asked:
+            raise
+        # The user's coarse and fine were not what asked for the memory.
+        if gap_asked is not None:
+            why = f"creases {gap_asked[0]:.3g} fine cells apart at fine {1 << gap_asked[1]}"
+            if gap_asked[0] < 1:
+                why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
+                        "are creases 0 apart)")
+        else:
+            why = "crease strips that failed on the coarser lattices"
+        raise MemoryBudgetError(f"{e}; fine was raised from {1 << asked} to {1 << fine_level} for {why}") from None
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
@@ -364,6 +380,19 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     m = Mesh(vertices=vertices, faces=faces, surface=surf, box=b, singularities=singular, stats=stats,
              skeleton_source=_skeleton_source(surf, b, node_level), singular_curves=curve_list,
              special_points=special, curve_graph=curve_graph(curves, vkeys, key0))
+    # Creases whose strips failed are meshed again on a finer lattice, as
+    # creases too close together are: a face between creases a few cells
+    # across is all tube, with no rail, and the edges round it lack a
+    # triangle (a truncated cube's corner triangles at fine 64), or the
+    # whole surface is tube and the mesh empty (an octahedron at fine 32).
+    # What is still wrong at the last try is said below.
+    if (len(creases.points) and not locus_curves and raises < tol.CREASE_RETRIES
+            and fine_level < tol.MAX_LEVEL and _strips_failed(m)):
+        try:
+            return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
+                         raises + 1)
+        except MemoryBudgetError:
+            pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings():
@@ -377,6 +406,32 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _strips_failed(m: Mesh) -> bool:
+    """Whether a crease edge inside the box has another number of triangles than two, or none has any.
+
+    Edges in a face of the box are left out: there a half-sheet may lie
+    in the face itself (a half ball cut by the box at its flat side).
+    """
+    inner = [c for c in m.singular_curves if not _in_box_face(c.points, m.box)]
+    if not inner:
+        return False
+    if not len(m.faces):
+        return True
+    return bool(m.curve_edges_short_of_sheets(lambda p, q: ~_same_face(p, q, m.box)))
+
+
+def _same_face(p: np.ndarray, q: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(k,) bool: the points p[i] and q[i] (k, 3) lie on one face of the box (to 1e-12 of its size)."""
+    tol_ = 1e-12 * float(np.max(box[:, 1] - box[:, 0]))
+    on = [(np.abs(p[:, a] - box[a, s]) <= tol_) & (np.abs(q[:, a] - box[a, s]) <= tol_) for a in range(3) for s in (0, 1)]
+    return np.any(on, axis=0)
+
+
+def _in_box_face(points: np.ndarray, box: np.ndarray) -> bool:
+    """Whether the polyline lies wholly in one face of the box."""
+    return bool(len(points)) and bool(_same_face(points[:1].repeat(len(points), 0), points, box).all())
 
 
 def _skeleton_source(surf: Surface, box: np.ndarray, level: int):

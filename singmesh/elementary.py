@@ -900,7 +900,25 @@ class _Kink(CreaseSystem):
             gi, gj = d[:, :3], d[:, 3:]
             jump = np.linalg.norm(gi - gj, axis=1)
             ok &= jump > tol.CREASE_JUMP * (np.linalg.norm(gi, axis=1) + np.linalg.norm(gj, axis=1))
+            # ... and F's own gradient a step to either side of the tie
+            # does too: where an enclosing Min or Max is tied to rounding
+            # with an argument of the same gradient (coplanar faces of two
+            # boxes joined by Min), which piece is picked at the point is
+            # rounding, and the jump there is none.
+            ok &= self._sides_differ(p)
         return ok & np.isfinite(fv)
+
+    def _sides_differ(self, p: np.ndarray) -> np.ndarray:
+        """(n,) bool: grad F differs a step ``CREASE_SIDE_STEP`` to either side of the tie G2 = 0 at p."""
+        g = self._s._graph
+        _, d = self.values(p)
+        m = d[:, 1] / np.maximum(np.linalg.norm(d[:, 1], axis=1, keepdims=True), 1e-300)
+        step = tol.CREASE_SIDE_STEP * np.maximum(np.abs(p).max(axis=1), 1.0)[:, None]
+        q = np.concatenate([p + step * m, p - step * m])
+        grad = np.stack(point_eval(g, self._s._grad, q), 1)
+        a, b = grad[:len(p)], grad[len(p):]
+        size = np.linalg.norm(a, axis=1) + np.linalg.norm(b, axis=1)
+        return np.linalg.norm(a - b, axis=1) > tol.CREASE_JUMP * size
 
     def may_vanish(self, data):
         lo, hi = self._s.corners(data)

@@ -458,8 +458,12 @@ class Mesh:
             lines = lines[~have]
         return np.vstack([self.vertices, pts[extra]]), lines
 
-    def curve_edges_short_of_sheets(self) -> int:
-        """Edges of the singular curves with another number of triangles than their type has half-sheets."""
+    def curve_edges_short_of_sheets(self, where=None) -> int:
+        """Edges of the singular curves with another number of triangles than their type has half-sheets.
+
+        ``where``: optional ``(p, q) -> (k,) bool`` on the edges' end points
+        (k, 3) each, the edges to count (all by default).
+        """
         if not self.singular_curves or not len(self.faces):
             return 0
         edges, counts = topology.edges_with_counts(self.faces)
@@ -468,8 +472,11 @@ class Mesh:
         bad = 0
         for c in self.singular_curves:
             v = np.asarray(c.vertices)
-            pairs = np.stack([v, np.roll(v, -1)], axis=1) if c.closed else np.stack([v[:-1], v[1:]], axis=1)
-            keys = (np.sort(pairs, axis=1) @ np.array([n, 1])).tolist()
+            k = np.arange(len(v))
+            ends = np.stack([k, np.roll(k, -1)], axis=1) if c.closed else np.stack([k[:-1], k[1:]], axis=1)
+            if where is not None:
+                ends = ends[np.asarray(where(c.points[ends[:, 0]], c.points[ends[:, 1]]), bool)]
+            keys = (np.sort(v[ends], axis=1) @ np.array([n, 1])).tolist()
             bad += sum(count.get(k, 0) != c.half_sheets for k in keys)
         return bad
 

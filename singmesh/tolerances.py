@@ -155,6 +155,14 @@ CREASE_MIN_GAP = 12.0
 #: lattice and the gap is reported in Mesh.stats.
 CREASE_MAX_RAISE = 3
 
+#: A mesh whose crease strips failed (a face between creases a few cells
+#: across, all tube) is made again at twice the fine level this many times
+#: at most: once was enough for every such face seen (a truncated cube's
+#: corners at fine 64 and 128, an octahedron at 32), and where input is
+#: degenerate (two boxes touching along a face, F = 0 on a patch inside
+#: the solid) each try costs four times the last for nothing.
+CREASE_RETRIES = 1
+
 #: Points of the creases count as apart (for CREASE_MIN_GAP) when the way
 #: between them along the creases is longer than this times their
 #: distance: two creases meeting at a corner at more than ~40 degrees are
@@ -602,6 +610,11 @@ CREASE_RESIDUAL = 1e-11
 #: Max picks another argument, both pieces give the same gradient).
 CREASE_JUMP = 1e-6
 
+#: A kink is active where grad F differs this far (relative to the point's
+#: scale) to either side of its tie: far above rounding (ties of an
+#: enclosing Min at 1e-17 pick a piece at random), far below any feature.
+CREASE_SIDE_STEP = 1e-7
+
 #: A tie of a Max/Min is on top when no third argument exceeds it by more
 #: than this times the arguments' size (a corner where three tie is
 #: still active, to rounding).
@@ -626,6 +639,13 @@ CREASE_CORNER = 1.5
 #: Abs kink's side edge meets it) and would trace a stretch twice.  Half a
 #: step: a trace's own next vertex is a whole step on.
 CREASE_ONTO = 0.5
+
+#: A sample of a kink's crease this close (trace steps) to the line of an
+#: earlier kink lies on it: the two kinks hold one crease (the coincident
+#: edges of two boxes with coplanar faces joined by Min), traced once.  A
+#: chord's sagitta on a curved crease is far below it (0.01 step at a
+#: radius of 12 steps); distinct creases a step apart are far above.
+CREASE_SAME = 0.05
 
 #: Two crease traces passing closer than this many trace steps, away from
 #: their ends, cross: they are cut there and the crossing is a corner

@@ -159,7 +159,7 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
     at x0; ``"end"``: the kink stops being active between the last vertex
     and the point returned as third item; ``"meet"``: the last vertex is
     where another crease (of ``systems``) meets it, or where the trace runs
-    onto ``earlier`` (points of this crease traced before: a trace that
+    onto ``earlier`` (points of this crease, or of the kinks before it, traced before: a trace that
     went on through a corner of its own crease, where the rim of
     Max(|u| + |v|, |w|) turns); ``"lost"``: Newton lost it.
     """
@@ -321,6 +321,7 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
     def near(sj, y):
         return trees[sj] is not None and trees[sj].query(y, distance_upper_bound=radius)[0] <= radius
 
+    others = []  # the lines of the kinks before this one
     for si, system in enumerate(systems):
         samples = found[si]
         if len(samples) == 0:
@@ -328,13 +329,18 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
         samples = samples[np.lexsort(samples.T[::-1])]
         tree = cKDTree(samples)
         covered = np.zeros(len(samples), bool)
+        if others:
+            # Two kinks along one curve (the coincident edges of two boxes
+            # with coplanar faces joined by Min) hold one crease, traced
+            # once: samples on a line of an earlier kink are covered by it.
+            covered |= _on_lines(samples, others, tol.CREASE_SAME * h)
         traced = []  # this crease's lines so far
         for i in range(len(samples)):
             if covered[i]:
                 continue
             x0 = samples[i]
             t0 = _tangent(system, x0)[0]
-            earlier = cKDTree(np.concatenate(traced)) if traced else None
+            earlier = cKDTree(np.concatenate(traced + others)) if traced or others else None
             fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near, earlier)
             if how_f == "closed":
                 back, how_b, out_b = [], "closed", None
@@ -353,7 +359,28 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
                 continue
             traced.append(pts)
             lines.append([si, pts, how_f == "closed", [how_b, how_f], [out_b, out_f]])
+        others += traced
     return systems, lines
+
+
+def _on_lines(x: np.ndarray, lines: list, within: float) -> np.ndarray:
+    """(k,) bool: the points x (k, 3) within ``within`` of a segment of one of the polylines."""
+    a = np.concatenate([p[:-1] for p in lines if len(p) > 1] or [np.zeros((0, 3))])
+    b = np.concatenate([p[1:] for p in lines if len(p) > 1] or [np.zeros((0, 3))])
+    out = np.zeros(len(x), bool)
+    if len(a) == 0:
+        return out
+    # The segments whose midpoints are within half the longest segment
+    # (and ``within``) of a point, then its distance to each of them.
+    reach = 0.5 * float(np.linalg.norm(b - a, axis=1).max()) + within
+    near = cKDTree(0.5 * (a + b)).query_ball_point(x, reach)
+    k = np.repeat(np.arange(len(x)), [len(js) for js in near])
+    j = np.fromiter((i for js in near for i in js), np.int64, count=len(k))
+    d = b[j] - a[j]
+    t = np.clip(np.einsum("ij,ij->i", x[k] - a[j], d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0, 1)
+    close = np.linalg.norm(a[j] + t[:, None] * d - x[k], axis=1) <= within
+    out[k[close]] = True
+    return out
 
 
 def crease_curves(surface: Surface, box, step: float, level: int | None = None) -> CurveSet:

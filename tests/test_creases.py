@@ -10,6 +10,8 @@ are vertices, and the mesh is closed (or open only on the box), manifold,
 with vertices on the surface.
 """
 
+import itertools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -325,6 +327,77 @@ def test_small_closed_crease_raises_the_fine_level():
 N_ROWS = _rotation(23)
 
 
+def test_corner_faces_a_few_cells_across_are_meshed_again_finer():
+    # A cube truncated at its corners, float-rotated: the corner triangles
+    # are 0.71 across, 6 cells from centre to sides at fine = 64.  There
+    # each is all tube, without a rail: the 24 crease edges round them
+    # had one triangle (470 open edges, chi -6).  The mesh sees its crease
+    # edges short of their two triangles and is made again on a finer
+    # lattice.
+    rot = _rotation(1)
+    L = [_lin(row) for row in rot]
+    eq = "Max(Max(Abs({0}), Abs({1}), Abs({2})) - 0.7, Abs({0}) + Abs({1}) + Abs({2}) - 1.6)".format(*L)
+    faces = [f"{s}{L[i]}-0.7" for i in range(3) for s in ("", "-")]
+    cuts = [f"{a}{L[0]}{b}{L[1]}{c}{L[2]}-1.6" for a in ("", "-") for b in "+-" for c in "+-"]
+    pairs = [(f, g) for f, g in itertools.combinations(faces, 2) if f.lstrip("-") != g.lstrip("-")] + [
+        (f, c) for f in faces for c in cuts]
+    box = np.array([[-1.3, 1.3]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=32, fine=64)
+    assert m.stats["fine"] > 64
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    corners = np.array([np.roll([s * 0.7, t * 0.7, r * 0.2], k) for k in range(3)
+                        for s in (-1, 1) for t in (-1, 1) for r in (-1, 1)])
+    corners = np.linalg.solve(rot, corners.T).T
+    assert np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.6
+    crease_edges, counts, length = _crease_edges(V, T, pairs, 2.6, m.stats["fine"])
+    samples = crease_points(eq, pairs, box, starts=1200)
+    assert len(samples) > 100
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 1e-9 * 2.6, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+
+
+def _tetrahedron_pairs(rot, a):
+    """The regular tetrahedron Max(L1 + L2 + L3, L1 - L2 - L3, ...) - a of the rotated coordinates,
+    and its 6 edges as pairs of face planes."""
+    L = [_lin(row) for row in rot]
+    faces = [f"{L[0]}+{L[1]}+{L[2]}", f"{L[0]}-{L[1]}-{L[2]}", f"-{L[0]}+{L[1]}-{L[2]}", f"-{L[0]}-{L[1]}+{L[2]}"]
+    eq = "Max({}, {}, {}, {}) - {}".format(*faces, a)
+    pairs = [(f"{faces[i]}-{a}", f"{faces[j]}-{a}") for i in range(4) for j in range(i + 1, 4)]
+    return eq, pairs
+
+
+@pytest.mark.parametrize("shape", ["octahedron", "tetrahedron"])
+def test_faces_narrower_than_the_tubes_raise_the_fine_level(shape):
+    # At coarse = fine = 32 every face of these float-rotated solids is
+    # narrower than the tubes round its sides: the whole surface was
+    # tube, no rail, and the mesh empty (0 triangles, a note blaming
+    # rounding).  The fine level is doubled until a face is not all tube.
+    rot = _rotation(5)
+    if shape == "octahedron":
+        L = [_lin(row) for row in rot]
+        eq = "Abs({}) + Abs({}) + Abs({}) - 0.9".format(*L)
+        pairs = [(L[i], f"{s}{L[j]}{t}{L[k]}-0.9") for i, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1))
+                 for s in ("", "-") for t in ("+", "-")]
+        corners = np.linalg.solve(rot, 0.9 * OCTA_CORNERS.T).T
+    else:
+        eq, pairs = _tetrahedron_pairs(rot, 0.5)
+        corners = np.linalg.solve(rot, -0.5 * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1.0]]).T).T
+    box = np.array([[-1.2, 1.2]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=32, fine=32)
+    assert len(m.faces) > 0 and m.stats["fine"] > 32
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    assert np.linalg.norm(V[None] - corners[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.4
+    crease_edges, counts, _ = _crease_edges(V, T, pairs, 2.4, m.stats["fine"])
+    samples = crease_points(eq, pairs, box, starts=400)
+    assert len(samples) > 20
+    d = _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]])
+    assert d.max() <= 1e-9 * 2.4, d.max()
+    assert np.all(counts == 2), np.bincount(counts)
+
+
 _U, _V, _W = (f"({_lin(R[i])}{c:+.10f})" for i, c in enumerate((0.0123456789, -0.0234567891, 0.0345678912)))
 #: The point u = v = w = 0 (where the kinks fade out).
 _FADE = np.linalg.solve(R, -np.array([0.0123456789, -0.0234567891, 0.0345678912]))
@@ -426,3 +499,60 @@ def test_crease_with_a_double_point_where_the_operands_are_tangent():
         assert dist.min() <= 1e-12 * 2.6, dist.min()
         k = int(dist.argmin())
         assert (crease_edges == k).any(axis=1).sum() == 4
+
+
+def test_a_refusal_after_raising_fine_for_creases_says_so():
+    # An L of two boxes joined by Min with coplanar faces: the edges of the
+    # two boxes coincide there, read as creases 0 apart, and fine is
+    # raised to its limit for them.  The memory refusal named only the
+    # user's coarse and fine, which were not what asked for the memory.
+    eq = "Min(Max(Abs(x)-0.8, Abs(y)-0.3, Abs(z)-0.3), Max(Abs(x+0.5)-0.3, Abs(y-0.5)-0.8, Abs(z)-0.3))"
+    with pytest.raises(singmesh.SurfaceError) as e:
+        singmesh.mesh(eq, box=[[-1.2, 1.2]] * 3, coarse=8, fine=16, max_memory="60MB")
+    text = str(e.value)
+    assert "\n" not in text and "over max_memory" in text
+    assert "fine was raised from 16 to 128 for creases 0 fine cells apart" in text and "coplanar faces" in text
+
+
+def test_boxes_with_coplanar_faces_joined_by_min(seed=None):
+    # An L of two boxes, u in [-0.8, 0.8] x [-0.3, 0.3] and [-0.8, -0.2] x
+    # [-0.3, 1.0] (z in [-0.3, 0.3] both), the common way to write it: their
+    # faces u = -0.8, v = -0.3 and w = +-0.3 are coplanar.  There the two
+    # boxes' edges coincide (two kinks along one crease, traced twice: creases
+    # 0 apart, and fine raised to 2048 until memory was refused), and on
+    # the common face plane the Min of the two boxes is tied to rounding, so
+    # the inner kinks of a box seemed active inside a flat face.
+    rot = np.eye(3) if seed is None else _rotation(seed)
+    L = [_lin(row) for row in rot]
+    eq = ("Min(Max(Abs({0})-0.8, Abs({1})-0.3, Abs({2})-0.3), "
+          "Max(Abs({0}+0.5)-0.3, Abs({1}-0.35)-0.65, Abs({2})-0.3))").format(*L)
+    outline = np.array([[-0.8, -0.3], [0.8, -0.3], [0.8, 0.3], [-0.2, 0.3], [-0.2, 1.0], [-0.8, 1.0]])
+    corners = np.array([[a, b, c] for a, b in outline for c in (-0.3, 0.3)])
+    segments = [(np.r_[p, c], np.r_[q, c]) for p, q in zip(outline, np.roll(outline, -1, 0)) for c in (-0.3, 0.3)]
+    segments += [(np.r_[p, -0.3], np.r_[p, 0.3]) for p in outline]
+    planes = [f"{L[0]}+0.8", f"{L[0]}-0.8", f"{L[0]}+0.2", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[1]}-1.0"]
+    pairs = [(a, b) for a, b in itertools.combinations(planes, 2) if a[:len(L[0])] != b[:len(L[0])]]
+    pairs += [(p, f"{L[2]}{s}0.3") for p in planes for s in "+-"]
+    box = np.array([[-1.2, 1.2]] * 3)
+    # (Float-rotated, the creases are still read as too close: fine is
+    # raised to its limit, as before; not yet right.)
+    fine = 64 if seed is None else 256
+    m = singmesh.mesh(eq, box=box, coarse=16 if seed is None else 32, fine=fine)
+    assert m.stats["fine"] == fine
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    x = np.linalg.solve(rot, corners.T).T
+    assert np.linalg.norm(V[None] - x[:, None], axis=2).min(axis=1).max() <= 1e-12 * 2.4
+    # Every crease vertex is on an edge of the L (no crease inside a flat face) ...
+    a = np.linalg.solve(rot, np.array([s[0] for s in segments]).T).T
+    b = np.linalg.solve(rot, np.array([s[1] for s in segments]).T).T
+    cp = np.concatenate([c.points for c in m.singular_curves])
+    assert _segment_distance(cp, a, b).max() <= 1e-9 * 2.4
+    # ... and every edge of the L (points found by Newton) is on crease edges with two triangles each.
+    crease_edges, counts, _ = _crease_edges(V, T, pairs, 2.4, fine)
+    samples = crease_points(eq, pairs, box, starts=1500)
+    # (The planes' lines run on through flat faces: the L's edges are the stretches on its outline.)
+    samples = samples[_segment_distance(samples, a, b) <= 1e-12 * 2.4]
+    assert len(samples) > 100
+    assert _segment_distance(samples, V[crease_edges[:, 0]], V[crease_edges[:, 1]]).max() <= 1e-9 * 2.4
+    assert np.all(counts == 2), np.bincount(counts)
