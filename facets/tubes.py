@@ -147,7 +147,7 @@ def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarr
     largest cell, a curve 6 x-cells from a face along 20 y-cells was all
     within reach of its ends).
     """
-    on_box = _faces_of(curve_points, box).any(axis=1)
+    on_box = faces_of(curve_points, box).any(axis=1)
     far = np.ones(len(points), bool)
     if not on_box.any():
         return far
@@ -172,7 +172,7 @@ def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.n
     for ev, closed in rail_list:
         if closed or len(ev) < 2:
             continue
-        run = _faces_of(points[ev], box).any(axis=1)
+        run = faces_of(points[ev], box).any(axis=1)
         # Maximal runs of consecutive such events.
         edges = np.diff(np.concatenate([[0], run.astype(np.int8), [0]]))
         for a, b in zip(np.nonzero(edges == 1)[0].tolist(), np.nonzero(edges == -1)[0].tolist()):
@@ -545,7 +545,7 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
         # end on that face, zipped to the end (fuzz s1-186: 18 of them, two
         # vertices closer than 1e-9 of the box; 4 without face rails).  The
         # strip's edge from the end to the rail is then on the box.
-        good &= ~_faces_of(pts, box).all(axis=1).any(axis=1)
+        good &= ~faces_of(pts, box).all(axis=1).any(axis=1)
     return keys[good], pts[good]
 
 
@@ -701,7 +701,7 @@ def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach
         for b in heads:
             pb = event_points[rail_list[b][0][0]]
             eb = event_points[rail_list[b][0][min(4, len(rail_list[b][0])) - 1]]
-            shared = _faces_of(pa, box) & _faces_of(pb, box)
+            shared = faces_of(pa, box) & faces_of(pb, box)
             if shared.any():
                 d = float(np.linalg.norm(pa - pb))
                 if d <= reach and (axes is None or _goes_on(pb - pa, pa - ea, eb - pb, shared)):
@@ -735,7 +735,7 @@ def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float
     for k in open_:
         p = event_points[rail_list[k][0]]
         a, b = p[0], p[-1]
-        if not (_faces_of(a, box) & _faces_of(b, box)).any():
+        if not (faces_of(a, box) & faces_of(b, box)).any():
             continue
         # Ends close together, or a short run as a whole (rotated planes
         # at 6 degrees, seed 4: 4 links a little over 3 cells end to end,
@@ -749,14 +749,14 @@ def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float
     for k in open_:
         p = event_points[rail_list[k][0]]
         m = min(len(p), 4)
-        if _faces_of(p[-1], box).any():
+        if faces_of(p[-1], box).any():
             tails[k] = (p[-1], p[-1] - p[-m])
-        if _faces_of(p[0], box).any():
+        if faces_of(p[0], box).any():
             heads[k] = (p[0], p[m - 1] - p[0])
     pairs = []
     for a, (pa, ua) in tails.items():
         for b, (pb, ub) in heads.items():
-            if a == b or (a not in stubs and b not in stubs) or not (_faces_of(pa, box) & _faces_of(pb, box)).any():
+            if a == b or (a not in stubs and b not in stubs) or not (faces_of(pa, box) & faces_of(pb, box)).any():
                 continue
             c = pb - pa
             d = float(np.linalg.norm(c))
@@ -830,8 +830,8 @@ def _axis_cells(box: np.ndarray, cell: float) -> np.ndarray:
     return (box[:, 1] - box[:, 0]) / float(np.max(box[:, 1] - box[:, 0])) * cell
 
 
-def _faces_of(p: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """(6,) bool: which faces of the box (x-, x+, y-, y+, z-, z+) the point lies on."""
+def faces_of(p: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(..., 6) bool: which faces of the box (x-, x+, y-, y+, z-, z+) the points (..., 3) lie on."""
     size = float(np.max(box[:, 1] - box[:, 0]))
     return np.stack([np.abs(p - box[:, 0]) <= 1e-9 * size, np.abs(p - box[:, 1]) <= 1e-9 * size], axis=-1).reshape(
         p.shape[:-1] + (6,))
@@ -839,13 +839,13 @@ def _faces_of(p: np.ndarray, box: np.ndarray) -> np.ndarray:
 
 def _corner_event(r: np.ndarray, e: np.ndarray, event_points: np.ndarray, box: np.ndarray, reach: float):
     """The event on the box edge between the faces of r and of e, if they share no face; else None."""
-    fr, fe = _faces_of(r, box), _faces_of(e, box)
+    fr, fe = faces_of(r, box), faces_of(e, box)
     if (fr & fe).any() or not fr.any() or not fe.any():
         return None
     near = np.nonzero(np.linalg.norm(event_points - (r + e) / 2, axis=1) <= reach)[0]
     if len(near) == 0:
         return None
-    flags = _faces_of(event_points[near], box)
+    flags = faces_of(event_points[near], box)
     on_edge = (flags & fr).any(axis=1) & (flags & fe).any(axis=1)
     if not on_edge.any():
         return None

@@ -21,7 +21,7 @@ from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, poi
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
-from singmesh.facets.tubes import curve_samples, tube_leaves, tube_regions
+from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -414,24 +414,15 @@ def _strips_failed(m: Mesh) -> bool:
     Edges in a face of the box are left out: there a half-sheet may lie
     in the face itself (a half ball cut by the box at its flat side).
     """
-    inner = [c for c in m.singular_curves if not _in_box_face(c.points, m.box)]
-    if not inner:
+    if all(faces_of(c.points, m.box).all(axis=0).any() for c in m.singular_curves):
         return False
     if not len(m.faces):
         return True
-    return bool(m.curve_edges_short_of_sheets(lambda p, q: ~_same_face(p, q, m.box)))
 
+    def inside(p, q):
+        return ~(faces_of(p, m.box) & faces_of(q, m.box)).any(axis=1)
 
-def _same_face(p: np.ndarray, q: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """(k,) bool: the points p[i] and q[i] (k, 3) lie on one face of the box (to 1e-12 of its size)."""
-    tol_ = 1e-12 * float(np.max(box[:, 1] - box[:, 0]))
-    on = [(np.abs(p[:, a] - box[a, s]) <= tol_) & (np.abs(q[:, a] - box[a, s]) <= tol_) for a in range(3) for s in (0, 1)]
-    return np.any(on, axis=0)
-
-
-def _in_box_face(points: np.ndarray, box: np.ndarray) -> bool:
-    """Whether the polyline lies wholly in one face of the box."""
-    return bool(len(points)) and bool(_same_face(points[:1].repeat(len(points), 0), points, box).all())
+    return bool(m.curve_edges_short_of_sheets(inside))
 
 
 def _skeleton_source(surf: Surface, box: np.ndarray, level: int):

@@ -38,7 +38,7 @@ from scipy.spatial import cKDTree
 from singmesh import tolerances as tol
 from singmesh.surface import CreaseSystem, Surface, boxes_where
 
-from .singular_curves import CurveSet, SingularCurve, SpecialPoint, back_at_start
+from .singular_curves import CurveSet, SingularCurve, SpecialPoint, _point_polyline_distance, back_at_start
 
 #: The type of a crease's pieces in :class:`CurveSet`.
 CREASE = "crease"
@@ -333,7 +333,9 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
             # Two kinks along one curve (the coincident edges of two boxes
             # with coplanar faces joined by Min) hold one crease, traced
             # once: samples on a line of an earlier kink are covered by it.
-            covered |= _on_lines(samples, others, tol.CREASE_SAME * h)
+            gap = np.min([_point_polyline_distance(samples, p) for p in others if len(p) > 1]
+                         or [np.full(len(samples), np.inf)], axis=0)
+            covered |= gap <= tol.CREASE_SAME * h
         traced = []  # this crease's lines so far
         for i in range(len(samples)):
             if covered[i]:
@@ -361,26 +363,6 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
             lines.append([si, pts, how_f == "closed", [how_b, how_f], [out_b, out_f]])
         others += traced
     return systems, lines
-
-
-def _on_lines(x: np.ndarray, lines: list, within: float) -> np.ndarray:
-    """(k,) bool: the points x (k, 3) within ``within`` of a segment of one of the polylines."""
-    a = np.concatenate([p[:-1] for p in lines if len(p) > 1] or [np.zeros((0, 3))])
-    b = np.concatenate([p[1:] for p in lines if len(p) > 1] or [np.zeros((0, 3))])
-    out = np.zeros(len(x), bool)
-    if len(a) == 0:
-        return out
-    # The segments whose midpoints are within half the longest segment
-    # (and ``within``) of a point, then its distance to each of them.
-    reach = 0.5 * float(np.linalg.norm(b - a, axis=1).max()) + within
-    near = cKDTree(0.5 * (a + b)).query_ball_point(x, reach)
-    k = np.repeat(np.arange(len(x)), [len(js) for js in near])
-    j = np.fromiter((i for js in near for i in js), np.int64, count=len(k))
-    d = b[j] - a[j]
-    t = np.clip(np.einsum("ij,ij->i", x[k] - a[j], d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0, 1)
-    close = np.linalg.norm(a[j] + t[:, None] * d - x[k], axis=1) <= within
-    out[k[close]] = True
-    return out
 
 
 def crease_curves(surface: Surface, box, step: float, level: int | None = None) -> CurveSet:
