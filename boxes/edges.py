@@ -279,6 +279,16 @@ def _unpack(packed: np.ndarray, fields: int, bits: int) -> np.ndarray:
     return np.stack([(packed >> (bits * (fields - 1 - i))) & mask for i in range(fields)], axis=1)
 
 
+def _line_xyz(rows: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """Lattice (x, y, z) (k, 3) of the points at positions ``pos`` along lines (axis, u, v) ``rows``."""
+    xyz = np.zeros((len(pos), 3))
+    r = np.arange(len(pos))
+    xyz[r, rows[:, 0]] = pos
+    xyz[r, (rows[:, 0] + 1) % 3] = rows[:, 1]
+    xyz[r, (rows[:, 0] + 2) % 3] = rows[:, 2]
+    return xyz
+
+
 def _corner_xyz(corners):
     """Lattice (x, y, z) of rows (axis, u, v, s) describing a point on a line."""
     a = corners[:, 0]
@@ -348,11 +358,7 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
     cell_key = ev_line * _LINE_STRIDE + np.floor(order_pos[order]).astype(np.int64)
 
     ln = lines[ev_line]
-    xyz = np.zeros((len(ev_line), 3))
-    r = np.arange(len(ev_line))
-    xyz[r, ln[:, 0]] = ev_pos
-    xyz[r, (ln[:, 0] + 1) % 3] = ln[:, 1]
-    xyz[r, (ln[:, 0] + 2) % 3] = ln[:, 2]
+    xyz = _line_xyz(ln, ev_pos)
     point = tree.lattice_to_space(xyz)
     # A root within SNAP_DISTANCE (of the box) of a lattice point: the
     # roots of the other lines through that point are as close; apart,
@@ -395,13 +401,7 @@ def _drop_false_touchings(surface, tree, lines, line_of, pos, snap, left, right)
     touch = np.flatnonzero(~snap & (left < 0) & (right < 0))
     if len(touch) == 0:
         return line_of, pos, snap, left, right
-    ln = lines[line_of[touch]]
-    xyz = np.zeros((len(touch), 3))
-    r = np.arange(len(touch))
-    xyz[r, ln[:, 0]] = pos[touch]
-    xyz[r, (ln[:, 0] + 1) % 3] = ln[:, 1]
-    xyz[r, (ln[:, 0] + 2) % 3] = ln[:, 2]
-    false = touch[~surface.is_zero(tree.lattice_to_space(xyz))]
+    false = touch[~surface.is_zero(tree.lattice_to_space(_line_xyz(lines[line_of[touch]], pos[touch])))]
     if len(false) == 0:
         return line_of, pos, snap, left, right
     keep = np.ones(len(pos), bool)
@@ -455,12 +455,7 @@ def _signs(surface, tree, lines_rows, pos):
     lattice lines) F is rounding noise of either sign, and read as is it
     would make r- and r+ events at random lattice points along it.
     """
-    xyz = np.zeros((len(pos), 3))
-    r = np.arange(len(pos))
-    xyz[r, lines_rows[:, 0]] = pos
-    xyz[r, (lines_rows[:, 0] + 1) % 3] = lines_rows[:, 1]
-    xyz[r, (lines_rows[:, 0] + 2) % 3] = lines_rows[:, 2]
-    points = tree.lattice_to_space(xyz)
+    points = tree.lattice_to_space(_line_xyz(lines_rows, pos))
     negative = surface(points) < 0
     if negative.any():
         negative[negative] = ~surface.is_zero(points[negative])
