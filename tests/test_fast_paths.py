@@ -617,11 +617,12 @@ def test_relation_of_boxes_and_regions_is_the_full_table():
 
 
 def test_powers_of_few_values_are_the_repeated_products():
-    """The running product of few values (one point's coordinates) has the bits of one product per power."""
+    """The running product of few values (one point's coordinates) has the bits of one product per power,
+    as have the row-wise products of many (laid out as columns afterwards)."""
     from singmesh.monomials import _FEW_VALUES, powers
 
     rng = np.random.default_rng(5)
-    for shape in [(1,), (3,), (2, 3), (_FEW_VALUES,), (_FEW_VALUES + 1,)]:
+    for shape in [(1,), (3,), (2, 3), (_FEW_VALUES,), (_FEW_VALUES + 1,), (5000,), (40, 30)]:
         values = rng.standard_normal(shape) * 10.0 ** rng.integers(-8, 8, shape)
         values.flat[0] = -0.0
         if values.size > 2:
