@@ -636,3 +636,26 @@ def test_powers_of_few_values_are_the_repeated_products():
                 got = powers(values, n)
             assert got.shape == want.shape
             assert np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+@pytest.mark.parametrize("text", ["4(x^2+y^2+z^2) + 16 x y z - 1", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0],
+                                  "x y z + 0.123456789012345 x^3 - 0.3 y^5 z^2 + 1.5 z^6"])
+def test_many_points_in_one_product_are_independent_of_the_batch(text):
+    # evaluate_tensors on many points (monomials._contract_many): a point's
+    # values do not depend on the other points of the call nor on the other
+    # tensors evaluated with it, and agree with the per-point contraction
+    # to the rounding of the sum of |terms|.
+    from singmesh.monomials import _MANY, _contract, evaluate_tensors
+
+    s = Surface.parse(text)
+    tensors = [s.coeffs, *s.gradient_coeffs]
+    rng = np.random.default_rng(11)
+    pts = np.concatenate([_point_cloud(4), rng.uniform(-2, 2, (3000, 3))])
+    full = np.stack(evaluate_tensors(tensors, pts), axis=-1)
+    for a, b in [(0, _MANY + 1), (3, 100), (17, 1017), (7, 136), (1, 2 * _MANY + 3), (50, len(pts))]:
+        part = np.stack(evaluate_tensors(tensors, pts[a:b]), axis=-1)
+        assert part.tobytes() == full[a:b].tobytes()
+        assert evaluate_tensors(tensors[:1], pts[a:b])[0].tobytes() == full[a:b, 0].tobytes()
+    alone = np.stack(_contract(tensors, pts, alone=True), axis=-1)
+    mag = np.stack(_contract([np.abs(t) for t in tensors], np.abs(pts), alone=True), axis=-1)
+    assert (np.abs(full - alone) <= 8 * np.finfo(float).eps * mag).all()
