@@ -37,11 +37,11 @@ def powers(values: np.ndarray, n: int) -> np.ndarray:
         return out
     # Many values: the powers as rows (each product a contiguous pass, not
     # a strided column: ten times faster), then laid out as columns.
-    out[...] = np.moveaxis(_power_rows(values, n), 0, -1)
+    out[...] = np.moveaxis(power_rows(values, n), 0, -1)
     return out
 
 
-def _power_rows(values: np.ndarray, n: int) -> np.ndarray:
+def power_rows(values: np.ndarray, n: int) -> np.ndarray:
     """``values ** i`` for i < n as rows (n, ...) by repeated products: the bits of :func:`powers`."""
     rows = np.empty((n,) + values.shape, dtype=float)
     rows[0] = 1.0
@@ -116,35 +116,45 @@ def _contract_many(tensors, p: np.ndarray) -> list[np.ndarray]:
     """The polynomials with monomial tensors ``tensors`` (one shape) at the rows of p (K, 3), for many rows.
 
     The products y^j z^k of each point (a (ny nz, K) table) against each
-    tensor in a matrix product (BLAS), then Horner's rule in x (whole
-    rows): no stack of K tiny matrix products.  The products are of one
-    shape whatever K (columns in blocks of ``_COLUMNS``, the last padded
-    with zeros), so that a point's values do not depend on the other
-    points or on the other tensors (BLAS takes small or narrower products
-    in other orders).  Other rounding than :func:`_contract`, as accurate.
+    tensor in a matrix product (:func:`column_products`), then Horner's
+    rule in x (whole rows): no stack of K tiny matrix products.  A point's
+    values do not depend on the other points or on the other tensors.
+    Other rounding than :func:`_contract`, as accurate.
     """
     nx, ny, nz = tensors[0].shape
-    k = len(p)
-    width = -(-k // _COLUMNS) * _COLUMNS
-    y, z = np.zeros(width), np.zeros(width)
-    y[:k], z[:k] = p[:, 1], p[:, 2]
-    q = (_power_rows(y, ny)[:, None, :] * _power_rows(z, nz)[None, :, :]).reshape(ny * nz, width)
+    q = (power_rows(p[:, 1], ny)[:, None, :] * power_rows(p[:, 2], nz)[None, :, :]).reshape(ny * nz, -1)
     x = p[:, 0]
     out = []
     for coeffs in tensors:
-        w = coeffs.reshape(nx, ny * nz)
-        t = np.empty((nx, width))
-        for c in range(0, width, _COLUMNS):
-            np.matmul(w, q[:, c:c + _COLUMNS], out=t[:, c:c + _COLUMNS])
-        v = t[nx - 1, :k].copy()
+        t = column_products(coeffs.reshape(nx, ny * nz), q)
+        v = t[nx - 1].copy()
         for i in range(nx - 2, -1, -1):
             v *= x
-            v += t[i, :k]
+            v += t[i]
         out.append(v)
     return out
 
 
-#: Columns (points) per matrix product in :func:`_contract_many`.
+def column_products(w: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``w @ q`` (BLAS) with each column's bits independent of the other columns.
+
+    BLAS rounds small or narrow products in another order than wide ones:
+    the columns go in blocks of ``_COLUMNS``, the last padded with zeros,
+    so that every product has one shape whatever the number of columns.
+    """
+    k = q.shape[1]
+    full = k - k % _COLUMNS
+    out = np.empty((w.shape[0], k))
+    for c in range(0, full, _COLUMNS):
+        np.matmul(w, q[:, c:c + _COLUMNS], out=out[:, c:c + _COLUMNS])
+    if full < k:
+        last = np.zeros((q.shape[0], _COLUMNS))
+        last[:, :k - full] = q[:, full:]
+        out[:, full:] = (w @ last)[:, :k - full]
+    return out
+
+
+#: Columns per matrix product in :func:`column_products`.
 _COLUMNS = 256
 
 
