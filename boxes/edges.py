@@ -87,27 +87,32 @@ class Events:
         # keys l * stride + cell lie in [l * stride - 1, l * stride + top]
         # (a snapped event at 0 on its - side is in cell -1).
         bounds = np.searchsorted(self.cell_key, np.arange(n_lines + 1, dtype=np.int64) * _LINE_STRIDE - 1)
-        valid = ids >= 0
-        line = np.where(valid, ids, 0)
-        lo = bounds[line]
-        n_ev = np.where(valid, bounds[line + 1] - lo, 0)
-        hi = lo.copy()
-        k_lo = line * _LINE_STRIDE + start
-        k_hi = line * _LINE_STRIDE + end
+        # Events per line, 0 for no line (-1 reads the last entry, 0).
+        per_line = np.append(np.diff(bounds), 0)
+        # Only the segments on lines with events go on (half of a surface's
+        # contact squares' edges have none): the rest have no event.
+        on = np.flatnonzero(per_line[ids])
+        line = ids[on]
+        n_ev = per_line[line]
+        lo_line = bounds[line]
+        lo, hi = lo_line.copy(), lo_line.copy()
+        k_lo = line * _LINE_STRIDE + start[on]
+        k_hi = line * _LINE_STRIDE + end[on]
         many = n_ev > _FEW_EVENTS
         if many.any():
             lo[many] = np.searchsorted(self.cell_key, k_lo[many], side="left")
             hi[many] = np.searchsorted(self.cell_key, k_hi[many], side="left")
-        act = np.nonzero((n_ev > 0) & ~many)[0]
-        j = 0
-        while len(act):
-            key = self.cell_key[bounds[line[act]] + j]
-            lo[act] += key < k_lo[act]
-            hi[act] += key < k_hi[act]
-            j += 1
-            act = act[n_ev[act] > j]
-        counts = np.where(valid, hi - lo, 0)
-        seg = np.repeat(np.arange(len(counts)), counts)
+        # The j-th event of every line at once (whole arrays, masked where
+        # a line has fewer: no gather and scatter of the segments still going).
+        few = np.where(many, 0, n_ev)
+        last = len(self.cell_key) - 1
+        for j in range(int(few.max(initial=0))):
+            key = self.cell_key[np.minimum(lo_line + j, last)] if j else self.cell_key[lo_line]
+            has = few > j
+            lo += (key < k_lo) & has
+            hi += (key < k_hi) & has
+        counts = hi - lo
+        seg = np.repeat(on, counts)
         first = np.repeat(lo - np.cumsum(counts) + counts, counts)
         ev = first + np.arange(counts.sum())
         return seg, ev

@@ -207,12 +207,13 @@ def test_box_graph_is_a_union_of_cycles():
         assert sorted(sorted(c) for c in nx.simple_cycles(g)) == expected
 
 
-@pytest.mark.parametrize("few, dense", [(16, 1 << 22), (0, 0)])
+@pytest.mark.parametrize("few, dense", [(16, 1 << 22), (2, 1 << 22), (0, 0)])
 def test_events_on_segments_by_brute_force(monkeypatch, few, dense):
     # Every event of every lattice segment of the leaves, and no other:
     # checked against each event's own line and position (floor of its
     # place along the line, a snapped one a thousandth to its side), on
-    # the stacked look-up and on the binary-search one (few = 0, dense = 0).
+    # the stacked look-up, on the binary-search one (few = 0, dense = 0) and
+    # on both at once (few = 2: lines with more events by binary search).
     import singmesh.boxes.edges as edges
     from singmesh.boxes.octree import subdivide
 
