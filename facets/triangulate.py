@@ -148,11 +148,13 @@ def triangulate_polygons(
     # forbidden to the facets concerned, and they choose again.
     n_vertices = len(points) + sum(len(p) for p in new_points)
     crowded = np.zeros(0, np.int64)
+    distinct = False  # whether the triangles are known to be distinct triples
     for _ in range(3):
         every = np.concatenate(faces)
         dup = _duplicated(every, n_vertices)
         fresh = np.setdiff1d(_crowded_edges(every, n_vertices), crowded)
         if len(dup) == 0 and len(fresh) == 0:
+            distinct = True
             break
         crowded = np.union1d(crowded, fresh)
         # Only the facets with two corners at such an edge or triangle
@@ -172,9 +174,12 @@ def triangulate_polygons(
     owner = np.concatenate(owner)
     # What is left doubled (two identical 3-gons) is a pillow of zero
     # volume: both copies go.
-    keys = _triple_keys(faces, n_vertices)
-    _, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
-    keep = counts[inv] == 1
+    if distinct:  # no triple twice (the last check): nothing to drop, no second sort
+        keep = np.ones(len(faces), bool)
+    else:
+        keys = _triple_keys(faces, n_vertices)
+        _, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
+        keep = counts[inv] == 1
     new_points = np.concatenate(new_points) if new_points else np.zeros((0, 3))
     return faces[keep], new_points, owner[keep]
 
