@@ -131,9 +131,14 @@ def real_roots(tau_poly: np.ndarray, bound: float):
     root = np.concatenate(roots)
     # A root that a step leaves unchanged (to the bit) stays so at every
     # later step (a step is a function of the root): only the others go on.
+    # Likewise a root that a step takes back to where it was the step
+    # before swings between those two values to the last step (a tenth of
+    # a surface's roots, whose two neighbouring floats both leave |p| at
+    # its rounding): it takes the one the last step would leave at once.
     active = np.arange(len(root))
     coeffs = tau_poly[row]
-    for _ in range(tol.NEWTON_ITERATIONS):
+    before = root.copy()  # each active root before the last step
+    for it in range(tol.NEWTON_ITERATIONS):
         c, r = coeffs[active], root[active]
         p, dp = _horner(c, r)
         ok = np.abs(dp) > 0
@@ -144,8 +149,13 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         pt, _ = _horner(c, trial)
         better = np.abs(pt) <= np.abs(p)
         new = np.where(better, trial, r)
-        root[active] = new
-        active = active[new.view(np.int64) != r.view(np.int64)]
+        moved = new.view(np.int64) != r.view(np.int64)
+        swing = moved & (new.view(np.int64) == before[active].view(np.int64)) if it else np.zeros(len(r), bool)
+        # The steps left alternate r and new: an even number of them ends on new.
+        last = new if (tol.NEWTON_ITERATIONS - 1 - it) % 2 == 0 else r
+        root[active] = np.where(swing, last, new)
+        before[active] = r
+        active = active[moved & ~swing]
         if len(active) == 0:
             break
     return row, root

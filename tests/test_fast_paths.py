@@ -682,3 +682,39 @@ def test_line_polynomials_are_F_on_the_lines_whatever_the_batch():
         along = np.polynomial.polynomial.polyval(t, poly.T, tensor=False)
         mag = s.magnitude(pts)
         assert (np.abs(along - s(pts)) <= 64 * np.finfo(float).eps * mag).all()
+
+
+def test_root_polishing_stops_swinging_roots_where_the_last_step_would_leave_them(monkeypatch):
+    # polynomial_lines.real_roots stops a root that Newton takes back and
+    # forth between two floats: its roots are those of every root taking
+    # all NEWTON_ITERATIONS steps, bit for bit (hard polynomials and the
+    # lines of a float-rotated surface and of a sphere).
+    from singmesh import tolerances
+
+    rng = np.random.default_rng(13)
+    polys = [_line_polynomials(rng, 3000)]
+    for text in ["x^2 + y^2 + z^2 - 1", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]]:
+        surface = Surface.parse(text)
+        fixed = np.round(rng.uniform(-1, 1, (2000, 2)) * 64) / 64
+        s0, s1 = np.full(2000, -1.5), np.full(2000, 1.5)
+        poly = polynomial_lines.line_polynomials(surface.coeffs, 0, fixed)
+        polys.append(polynomial_lines._rescale(poly, (s0 + s1) / 2, (s1 - s0) / 2))
+    swung = 0
+    for p in polys:
+        got_row, got = polynomial_lines.real_roots(p, 1.0)
+        with monkeypatch.context() as m:
+            m.setattr(tolerances, "NEWTON_ITERATIONS", 0)
+            row, root = polynomial_lines.real_roots(p, 1.0)
+        assert np.array_equal(row, got_row)
+        # Every root through every step (the loop without stops).
+        c = p[row]
+        seen = [root]
+        for _ in range(tolerances.NEWTON_ITERATIONS):
+            val, d = polynomial_lines._horner(c, root)
+            ok = np.abs(d) > 0
+            trial = root - np.where(ok, val / np.where(ok, d, 1.0), 0.0)
+            root = np.where(np.abs(polynomial_lines._horner(c, trial)[0]) <= np.abs(val), trial, root)
+            seen.append(root)
+        assert got.tobytes() == root.tobytes()
+        swung += int(((seen[-1] == seen[-3]) & (seen[-1] != seen[-2])).sum())
+    assert swung > 10
