@@ -454,6 +454,8 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     d = np.linalg.norm(curve_points[curve_edges[:, 0]] - curve_points[curve_edges[:, 1]], axis=1)
     g.add_weighted_edges_from(zip(curve_edges[:, 0].tolist(), curve_edges[:, 1].tolist(), d.tolist()))
     tree = cKDTree(curve_points)
+    _, piece = connected_components(coo_matrix((np.ones(len(curve_edges)), (curve_edges[:, 0], curve_edges[:, 1])),
+                                               shape=(len(curve_points),) * 2), directed=False)
     end_tree = cKDTree(curve_points[box_ends]) if len(box_ends) else None
     if box is not None:
         rail_list = _chain_on_faces(rail_list, event_points, curve_points[box_ends], reach, box, near, cell)
@@ -474,6 +476,7 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
     for events, closed in rail_list:
         r = event_points[events]
         dist, snap = tree.query(r)
+        snap = _one_piece(snap, r, piece, curve_points)
         if steady is not None:
             if closed and len(events) > 2:
                 # A closed rail starts where it is nearest the curve (along
@@ -574,6 +577,41 @@ def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: i
     if 2 * over <= len(w) - 1:
         return w
     return min((c for c in walks if c[1] <= 2.0 * d0), key=lambda c: (c[0], c[1]))[2]
+
+
+def _one_piece(snap: np.ndarray, r: np.ndarray, piece: np.ndarray, curve_points: np.ndarray) -> np.ndarray:
+    """The rail's snaps with its short excursions onto another curve re-snapped to the curve it runs along.
+
+    A rail on the tube's wall between two curves some cells apart (their
+    tubes nearly meet) can come nearer the other curve for an event or
+    two and go back: a strip stepping from one curve to another, which
+    the curve graph does not join, makes a triangle across the gap from
+    a vertex of one curve to one of the other (fuzz s1-614, s1-302: open
+    and non-manifold edges between two double curves 12 cells apart).
+    A run of snaps on another piece of the curve graph, between two runs
+    on one piece and at most ``CURVE_ZIGZAG_STEPS`` events long, goes to
+    the nearest vertex of that piece, when such runs are at most a quarter
+    of the rail: a rail that alternates between two curves all along (a
+    half-sheet between them poking out of the tubes) is left as it is.
+    """
+    lab = np.array(piece[snap])
+    change = np.nonzero(lab[1:] != lab[:-1])[0] + 1
+    if len(change) < 2:
+        return snap
+    out = np.array(snap)
+    bounds = np.concatenate([[0], change, [len(snap)]])
+    moved = 0
+    for k in range(1, len(bounds) - 2):
+        a, b = int(bounds[k]), int(bounds[k + 1])
+        around = lab[a - 1]
+        if lab[b] != around or b - a > tol.CURVE_ZIGZAG_STEPS:
+            continue
+        mine = np.nonzero(piece == around)[0]
+        d = np.linalg.norm(r[a:b, None, :] - curve_points[mine][None], axis=2)
+        out[a:b] = mine[np.argmin(d, axis=1)]
+        lab[a:b] = around
+        moved += b - a
+    return out if 4 * moved <= len(snap) else snap
 
 
 def _steady_snaps(snap: np.ndarray, steady: np.ndarray, g: nx.Graph, closed: bool = False) -> np.ndarray:

@@ -435,6 +435,11 @@ CURVE_STOP = 1e-13
 #: of the step).
 CURVE_CLIP_ROUNDS = 30
 
+#: Halvings of the chord that bracket a curve's exit from the box when the
+#: rounds above leave the end off the curve (skeleton.singular_curves.
+#: _bisect_exit): 2^-50 of a step is rounding level for the end.
+CURVE_CLIP_BISECT = 50
+
 #: Other changes of type (read from the arcs on a circle, which blur
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3
@@ -497,7 +502,10 @@ CURVE_MEET_BALL = 24.0
 #: excursions round the non-simple leaves joined to the balls reach about
 #: ``ball_grow`` cells (20 at 256 cells per box); a rail that turns round
 #: the end of a curve comes back along all of it.  (Rotated Roman surface:
-#: 12 rail steps left an edge of 8 triangles, 24 none.)
+#: 12 rail steps left an edge of 8 triangles, 24 none.)  Also the longest
+#: run of a rail's snaps onto another piece of the curve graph that is
+#: taken for an excursion (facets.tubes._one_piece: 1 to 3 events in fuzz
+#: s1-614 and s1-302), not for a rail that goes on along the other piece.
 CURVE_ZIGZAG_STEPS = 24
 
 #: The square-free part is computed (sympy, exact) for polynomials with at

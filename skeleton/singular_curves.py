@@ -463,7 +463,52 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
         if not length > tol.CURVE_STOP * h:
             break
     z[axis] = value
-    return np.clip(z, box[:, 0], box[:, 1])
+    z = np.clip(z, box[:, 0], box[:, 1])
+    # The slides wandered off (a chord a few degrees from the face, the
+    # curve bulging out of the box just beyond x: fuzz s1-394's end went
+    # back along the face, 3.8e-5 of the box off the surface): the curve's
+    # points on the planes across the chord, bisected between x (inside)
+    # and y (outside).  Only for an end that is not even a sample of the
+    # locus (``_limit``): Crixxi's cuspidal edges leave through edges of
+    # the box, where Newton across them converges slowly and the rounds
+    # stop between a sample's residual and a vertex's; bisected, those
+    # ends came off the second face, and open edges.
+    if not residual(surface, z[None])[0] > _limit(surface):
+        return z
+    w = _bisect_exit(surface, box, x, y, h)
+    if w is not None and residual(surface, w[None])[0] < residual(surface, z[None])[0]:
+        return w
+    return z
+
+
+def _bisect_exit(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: float):
+    """The curve's point on the box's boundary between x (inside) and y (outside), by bisection, or None.
+
+    The curve's point on the plane across the chord at x + s (y - x)
+    (Newton in that plane) is inside the box at s = 0 and outside at
+    s = 1; ``CURVE_CLIP_BISECT`` halvings of s bracket the exit, and the
+    last point inside is put on the face the first outside has crossed.
+    """
+    d = y - x
+    t = _unit(d)
+    lo, hi = 0.0, 1.0
+    inside, outside = x, None
+    for _ in range(tol.CURVE_CLIP_BISECT):
+        s = 0.5 * (lo + hi)
+        p = _correct(surface, (x + s * d)[None], t[None], h, polish=True)[0][0]
+        if not np.isfinite(p).all():
+            return None
+        if _inside(box, p):
+            lo, inside = s, p
+        else:
+            hi, outside = s, p
+    if outside is None:
+        return None
+    below = outside < box[:, 0]
+    axis = int(np.argmax(np.maximum(box[:, 0] - outside, outside - box[:, 1])))
+    w = inside.copy()
+    w[axis] = box[axis, 0] if below[axis] else box[axis, 1]
+    return np.clip(w, box[:, 0], box[:, 1])
 
 
 def _exit_beyond(box: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:

@@ -269,3 +269,34 @@ def test_cone_times_sphere_circle_along_an_edge_of_the_box():
     box = ((p[0] - 3 * cell, p[0] - 3 * cell + 2.5), (p[1] - 1.25, p[1] + 1.25), (p[2] + 6 * cell - 2.5, p[2] + 6 * cell))
     m, _ = check_curve_mesh(text, box, 1, half_sheets=4)
     assert _every_curve_edge_has(m, 4) == []
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_plane_cutting_a_thin_cylinder_in_two_lines_13_cells_apart(seed):
+    # The plane z = r/2 cuts the cylinder x^2 + z^2 = r^2 along the lines
+    # x = +-r sin 60deg, 13 fine cells apart at coarse 8 / fine 64 (float
+    # rotation and shift); the sheets cross at 60 degrees.  The two tubes'
+    # walls nearly touch between the lines, and a rail along one line came
+    # nearer the other for an event or two: its strip stepped from one
+    # line to the other, a triangle across the gap (the class of fuzz
+    # s1-614 and s1-302).  On main: 16 and 6 open edges inside the box.
+    r = 13.0 / 32.0 / np.sqrt(3.0)
+    text = float_rotated(f"(z - {r / 2:.15g}) (x^2 + z^2 - {r * r:.15g})", seed)
+    m, _ = check_curve_mesh(text, BOX1, 1, half_sheets=4, coarse=8, fine=64)
+    assert _every_curve_edge_has(m, 4) == []
+
+
+def test_sphere_and_plane_circle_leaving_a_face_at_a_small_angle():
+    # The unit sphere times the plane z = 0 (float rotation, seed 1): the
+    # double circle, cut by the face x = x1 0.003 inside its farthest point,
+    # leaves the box at 4.4 degrees to the face.  The trace's last chord
+    # runs nearly along the face, and the rounds of Newton and slides onto
+    # the face wandered along it: the curve's end was placed off the
+    # curve, its edges of 4 triangles not between singular vertices (the
+    # class of fuzz s1-394; skeleton/singular_curves.py _bisect_exit).
+    text = float_rotated("(x^2 + y^2 + z^2 - 1) z", 1)
+    circle = _rotated_circle(1, 1.0, 0.0)
+    assert np.abs(lambdas(text)[2](circle)).max() <= 1e-9
+    p = circle[np.argmax(circle[:, 0])]
+    box = ((p[0] - 1.6, p[0] - 0.003), (p[1] - 1.03, p[1] + 0.97), (p[2] - 0.98, p[2] + 1.02))
+    check_curve_mesh(text, box, 1, half_sheets=4, coarse=8, fine=64)
