@@ -251,7 +251,8 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
             # Starts of a degenerate point spread over its region (up to
             # ~eps^(1/(k+1))): those closer than a few times this one's
             # distance centre to the same point.
-            reach = 4.0 * float(np.linalg.norm(q - p)) if (kind.milnor or 0) > 1 else 0.0
+            # (Non-simple ones, Milnor number not found, too.)
+            reach = 4.0 * float(np.linalg.norm(q - p)) if kind.milnor is None or kind.milnor > 1 else 0.0
             regions.append((q, max(reach, tol.SINGULAR_MERGE * size.max())))
             found.append(SingularPoint(point=q, residual=r, hessian_rank=3 - kind.corank,
                                        signature=kind.hessian_signature, classification=kind))

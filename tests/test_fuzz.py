@@ -186,6 +186,15 @@ REGRESSIONS = [
     # it; one curve vertex was 3.8e-5 of the box off F = 0.
     ("A3 isolated line and a sheet, rotated", _rotated("x^2*(y + z^3) + z*y^4", 5, (0.05, -0.1, 0.02)),
      ((-1.0, 1.0),) * 3, 8, 64),
+    # The origin is the only singular point (sympy's Groebner basis of
+    # F, grad F: x + ..., y^5, z^3), a non-simple germ ~ x^2 - y^6 - z^4
+    # (corank 2, zero cubic).  F and grad F are below 1e-12 up to 4e-3 from
+    # it, where points read as E6 and were not centred: 12 "E6 points", one
+    # vertex 4e-8 of the box off F = 0 (skeleton/centre.py _NON_SIMPLE).
+    # test_non_simple_germ_is_one_point checks the report.
+    ("s1-877 a non-simple germ",
+     "-2.02039170670759*z^4 + 1.83785346374069*x*y^3 + 1.73940194134003*x^2*y + 2.54458067248033*x^2",
+     ((-0.5, 0.5), (-2.0, 2.0), (-1.0, 1.0)), 8, 64),
 ]
 
 
@@ -199,6 +208,55 @@ def test_fuzz_regression(name, text, box, coarse, fine):
     case = fc.case_from_text(name, text, box)
     v = fc.judge(case, coarse, fine)
     assert v.status == "clean", f"{text} on {box}: {v.detail}"
+
+
+#: Non-simple isolated points, each one singular point of F = 0 (where it is
+#: and its real branches: from sympy / oracles, not from the mesher).
+NON_SIMPLE = [
+    ("s1-877", "-2.02039170670759*z^4 + 1.83785346374069*x*y^3 + 1.73940194134003*x^2*y + 2.54458067248033*x^2",
+     ((-0.5, 0.5), (-2.0, 2.0), (-1.0, 1.0)), None, None),
+    # Arnold's X9 (corank 2, zero cubic, four distinct lines in the quartic)
+    # and W-type x^2 - y^6 - z^4 (the germ of s1-877), rotated and shifted:
+    # on main 12 "D4 points" and 26 "E6 points", none of them a vertex.
+    ("X9 rotated", "z^2 - x^4 - y^4", ((-1.0, 1.0),) * 3, 3, (0.05, -0.1, 0.02)),
+    ("W x^2 - y^6 - z^4 rotated", "x^2 - y^6 - z^4", ((-1.0, 1.0),) * 3, 5, (0.05, -0.1, 0.02)),
+    # P8 (corank 3, a cubic cone with three real lines), rotated.
+    ("P8 rotated", "x^3 + y^3 + z^3 - 4*x*y*z", ((-1.0, 1.0),) * 3, 11, (-0.03, 0.07, 0.1)),
+]
+
+
+@pytest.mark.parametrize("name, text, box, seed, shift", NON_SIMPLE, ids=[c[0] for c in NON_SIMPLE])
+def test_non_simple_germ_is_one_point(name, text, box, seed, shift):
+    """A non-simple germ is reported as one non-simple point, a vertex with
+    its branches, never as a cloud of simple ones around it."""
+    import warnings
+
+    import meshcheck as mc
+    import oracles
+    import singmesh
+
+    if seed is None:
+        apex = np.zeros(3)
+        # The singular points of F by sympy (exact rationals): the origin only.
+        case = fc.case_from_text(name, text, box)
+        F = case.poly
+        gb = sp.groebner([F] + [F.diff(v) for v in fc.XYZ], *fc.XYZ, order="lex")
+        assert sp.solve_poly_system(gb.exprs, *fc.XYZ) == [(0, 0, 0)]
+    else:
+        text = _rotated(text, seed, shift)
+        q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+        apex = np.linalg.solve(q, np.array(shift))
+        case = fc.case_from_text(name, text, box)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", singmesh.SingularPointWarning)
+        m = singmesh.mesh(text, box, coarse=8, fine=64)
+    assert len(m.singularities) == 1, [str(s) for s in m.singularities][:3]
+    s = m.singularities[0]
+    assert s.classification.name == "non-simple"
+    assert np.linalg.norm(np.asarray(s.point) - apex) <= 1e-6
+    branches = oracles.branches_on_sphere(fc.Field(case.poly).value, apex, 0.1, n_lat=240, n_lon=480)
+    assert s.vertex is not None and mc.fans_at(m.faces, s.vertex) == branches
+    assert fc.judge(case, 8, 64).status == "clean"
 
 
 @pytest.mark.parametrize("index", range(SAMPLE_SIZE))
