@@ -186,6 +186,19 @@ REGRESSIONS = [
     # it; one curve vertex was 3.8e-5 of the box off F = 0.
     ("A3 isolated line and a sheet, rotated", _rotated("x^2*(y + z^3) + z*y^4", 5, (0.05, -0.1, 0.02)),
      ((-1.0, 1.0),) * 3, 8, 64),
+    # The x-axis lies on the surface, tangent to the face y = 0 along it
+    # (F = -0.715 x^2 y + ... there), and the hyperbola's other branch
+    # crosses the cells beside it (x = 0.25 .. 0.28).  On the faces x =
+    # 0.25 and 0.28 (no graph axis: F's saddle is inside) the corner on the
+    # axis has an event on each edge; paired along the boundary "each
+    # start with the next end", each went to the other branch, which was
+    # joined to the axis (edges of 4 triangles; boxes/faces.py
+    # _corner_events).
+    ("s1-533 a branch joined to a line on the lattice",
+     "-2.666004875266*x*z^2 - 0.715015552404059*x^2*y + 2.63107313588995*y*z", ((-1.0, 1.0),) * 3, 8, 64),
+    # Of the same class with other coefficients, the line on the z-axis.
+    ("z-axis on the surface, tangent to x = 0",
+     "2.71828182845905*x*y - 1.41421356237310*z*y^2 - 0.577215664901533*z^2*x", ((-1.0, 1.0),) * 3, 8, 64),
     # The origin is the only singular point (sympy's Groebner basis of
     # F, grad F: x + ..., y^5, z^3), a non-simple germ ~ x^2 - y^6 - z^4
     # (corank 2, zero cubic).  F and grad F are below 1e-12 up to 4e-3 from
