@@ -272,6 +272,80 @@ def test_non_simple_germ_is_one_point(name, text, box, seed, shift):
     assert fc.judge(case, 8, 64).status == "clean"
 
 
+def _parabola_plane_arc(seed: int = 11, depth: float = 0.06, a: float = 8.0) -> str:
+    """A parabolic cylinder z = a x^2 times the plane y = z / 10, each
+    rotated (numpy QR of ``seed``) and shifted, their parabola's vertex
+    ``depth`` inside the box [-1, 1]^3 from its face x = 1, opening out of
+    it: an arc 0.2 long (its length outside the box, which it leaves
+    through that face)."""
+    q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    shift = tuple(round(float(v), 6) for v in q @ np.array([1 - depth, 0.1, -0.2]))
+    opening = 1 if q[2, 0] > 0 else -1   # +z of the rotated coordinates is q[2] in the box's
+    return (f"({_rotated(f'{opening}*z - {a}*x^2', seed, shift)})"
+            f"*({_rotated('y - 0.1*z', seed, shift)})")
+
+
+#: Products whose double curve is a short arc from a face of the box back
+#: to it (shorter than the two trace steps asked of a curve).
+SHORT_ARCS = [
+    # f1 = f2 = 0 dips 0.05 (2.8 cells along z) below z = 0 into the box
+    # from its face z = -0.05, 0.34 long: its samples were taken for an
+    # isolated point's and not traced; Newton across its tangent (pinv,
+    # then the step along it dropped) jittered at a residual of 1e-8 and
+    # two points on it were reported as "non-simple" points (close
+    # vertices, a vertex 1.4e-8 of the box off F = 0).
+    ("s1-682", "(6*x^2*y - 3*z)*(-2.57625135148072*y^3 - 0.255252270004791*x^2*z - 0.709279785999579*z^2"
+     " - 1.74424755898056)", ((-1.1621297997164315, 1.7299395124368098),
+                              (-1.595886277199356, 0.9796144187808289), (-0.05, 1.0899999999999999))),
+    # Of the same class: seen as no curve at all on main (no edge of four
+    # triangles).
+    ("parabola of a cylinder and a plane, rotated", _parabola_plane_arc(), ((-1.0, 1.0),) * 3),
+]
+
+
+def _common_zeros(f1, f2, box, n: int = 41) -> np.ndarray:
+    """Points of f1 = f2 = 0 in ``box``: Newton (min-norm) on (f1, f2) from
+    the grid points near both surfaces."""
+    g = fc._grid(box, n).reshape(-1, 3)
+    size = float(np.ptp(box, axis=1).max())
+    near = np.ones(len(g), bool)
+    for f in (f1, f2):
+        near &= np.abs(f.value(g)) <= 2.0 * size / n * np.linalg.norm(f.grad(g), axis=1)
+    p = g[near]
+    for _ in range(30):
+        J = np.stack([f1.grad(p), f2.grad(p)], axis=1)              # (K, 2, 3)
+        r = np.stack([f1.value(p), f2.value(p)], axis=1)
+        p = p - np.einsum("kij,kj->ki", np.linalg.pinv(J), r)
+    ok = (np.abs(f1.value(p)) < 1e-12) & (np.abs(f2.value(p)) < 1e-12)
+    ok &= ((p > box[:, 0]) & (p < box[:, 1])).all(axis=1)
+    return p[ok]
+
+
+@pytest.mark.parametrize("name, text, box", SHORT_ARCS, ids=[c[0] for c in SHORT_ARCS])
+def test_short_arc_of_double_curve_is_traced(name, text, box):
+    """The arc is followed by mesh edges with four triangles (two sheets
+    crossing), checked at its points found here by Newton on the factors."""
+    import meshcheck as mc
+    import singmesh
+    from scipy.spatial import cKDTree
+
+    case = fc.case_from_text(name, text, box)
+    assert case.factors
+    b = case.box_array()
+    arc = _common_zeros(*(fc.Field(f) for f in case.factors), b)
+    assert len(arc) >= 10
+    m = singmesh.mesh(text, box, coarse=8, fine=64)
+    counts = mc.edge_counts(m.faces)
+    edges = np.array([e for e, k in counts.items() if k == 4])
+    assert len(edges), "no edge where the two sheets cross"
+    on = np.concatenate([m.vertices[edges[:, 0]], m.vertices[edges[:, 1]],
+                         0.5 * (m.vertices[edges[:, 0]] + m.vertices[edges[:, 1]])])
+    cell = float(np.ptp(b, axis=1).max()) / 64
+    far = cKDTree(on).query(arc)[0]
+    assert far.max() <= cell, f"arc points {far.max() / cell:.2g} cells from the crossing edges"
+    assert fc.judge(case, 8, 64).status == "clean"
+
+
 @pytest.mark.parametrize("index", range(SAMPLE_SIZE))
 def test_fuzz_sample(index):
     case = fc.make_case(SAMPLE_SEED, index)
