@@ -1113,16 +1113,12 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     k = max(1, tol.CURVE_TRACE_STEP)
     # Samples of isolated points gather in small clusters: only clusters
     # longer than a few trace steps can hold a curve.
-    # Shorter ones too where they reach the box: an arc of a curve that
-    # dips into the box from a face (fuzz s1-682: 0.34 long, 2.8 cells
-    # deep) is no longer than an isolated point's cluster.
     samples = _long_clusters(samples, float(np.max(box[:, 1] - box[:, 0])) / (1 << level),
-                             tol.CURVE_MIN_STEPS * k * step, box)
+                             tol.CURVE_MIN_STEPS * k * step)
     if len(samples) < 3:
         return CurveSet()
     lines = trace_curves(surface, box, samples, k * step)
-    lines = [(p, c) for p, c in lines
-             if _extent(p) >= tol.CURVE_MIN_STEPS * k * step or (not c and _ends_on_box(p, box))]
+    lines = [(p, c) for p, c in lines if _extent(p) >= tol.CURVE_MIN_STEPS * k * step]
     if not lines:
         return CurveSet()
     lines = densify(surface, lines, k)
@@ -1281,10 +1277,8 @@ def branch_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, ste
     return out
 
 
-def _long_clusters(x: np.ndarray, gap: float, length: float, box: np.ndarray | None = None) -> np.ndarray:
-    """The points in clusters (single linkage at ``2 gap``) that extend over
-    ``length`` at least, or (with ``box``) come within ``2 gap`` of two of
-    its faces or twice of one (an arc cut off by the box)."""
+def _long_clusters(x: np.ndarray, gap: float, length: float) -> np.ndarray:
+    """The points in clusters (single linkage at ``2 gap``) that extend over ``length`` at least."""
     if len(x) < 3:
         return x
     from scipy.sparse import coo_matrix
@@ -1298,22 +1292,7 @@ def _long_clusters(x: np.ndarray, gap: float, length: float, box: np.ndarray | N
     np.minimum.at(lo, label, x)
     np.maximum.at(hi, label, x)
     long = (hi - lo).max(axis=1) >= length
-    if box is not None and not long.all():
-        # Points near a face, per cluster and face: an arc cut by the box
-        # has its two ends there (one face or two).
-        near = np.concatenate([x - box[:, 0] <= 2.0 * gap, box[:, 1] - x <= 2.0 * gap], axis=1)   # (n, 6)
-        ends = np.zeros((n, 6), np.int64)
-        np.add.at(ends, label, near.astype(np.int64))
-        faces = (ends > 0).sum(axis=1)
-        long |= (faces >= 2) | ((faces == 1) & ((hi - lo).max(axis=1) >= 4.0 * gap))
     return x[long[label]]
-
-
-def _ends_on_box(p: np.ndarray, box: np.ndarray) -> bool:
-    """Whether both ends of the polyline ``p`` lie on the box's boundary."""
-    size = float(np.max(box[:, 1] - box[:, 0]))
-    on = (np.abs(p[[0, -1], :, None] - box[None]) <= 1e-9 * size).any(axis=(1, 2))
-    return bool(on.all())
 
 
 def _extent(p: np.ndarray) -> float:
