@@ -199,6 +199,21 @@ REGRESSIONS = [
     # Of the same class with other coefficients, the line on the z-axis.
     ("z-axis on the surface, tangent to x = 0",
      "2.71828182845905*x*y - 1.41421356237310*z*y^2 - 0.577215664901533*z^2*x", ((-1.0, 1.0),) * 3, 8, 64),
+    # The node of the cone (origin) is 0.36 from the plane; their double
+    # curve ran 8 cells from it, through the node's star cube (grown over
+    # the non-simple leaves to [-0.5, 0.5] x [-0.125, 0.125] x [-0.5, 0.5]):
+    # the tube took 31 of its leaves and fanned the star's boundary links
+    # to the curve (an isolated triangle, 3 open edges; facets/stars.py
+    # star_cubes reaches half-way to the curves).
+    ("s1-674 a node's star and a double curve",
+     "(-1.50888575821945*z - 2.384556003321*y + 1.01948773647118)*(2/7*z^2 - 1/3*y*z + 8/3*x*y + 2*x^2)",
+     ((-2.0, 2.0), (-0.5, 0.5), (-2.0, 2.0)), 8, 64),
+    # Of the same class: a cone x^2 + y^2 = z^2 and a plane 0.3 from its
+    # apex, rotated (seed 3) and shifted (3 open edges on main).
+    ("a cone's node near a plane, rotated",
+     f"({_rotated('x^2 + y^2 - z^2', 3, (0.05, -0.1, 0.02))})"
+     f"*({_rotated('x + 0.3*y - 0.3', 3, (0.05, -0.1, 0.02))})",
+     ((-1.0, 1.0),) * 3, 8, 64),
     # A double curve 0.05 deep in the box from the face z = -0.05 (see
     # SHORT_ARCS): Newton across its tangent (pinv, then the step along the
     # tangent dropped) jittered at a residual of 1e-8 where the tangent was
