@@ -224,6 +224,13 @@ REGRESSIONS = [
      "(6*x^2*y - 3*z)*(-2.57625135148072*y^3 - 0.255252270004791*x^2*z - 0.709279785999579*z^2"
      " - 1.74424755898056)", ((-1.1621297997164315, 1.7299395124368098),
                               (-1.595886277199356, 0.9796144187808289), (-0.05, 1.0899999999999999)), 8, 64),
+    # The origin is a non-simple point (Hessian zero; on main a cloud of 22
+    # "non-simple points" there).  Centred as one, its star has a 2-event
+    # cycle whose skeleton node (x-direction: F_x = 0 on all of x = 0) fell
+    # on an event of another cycle at x = 0: two vertices 3e-31 apart
+    # (skeleton/curves.py skeleton_links_many, NODE_ON_OTHER).
+    ("s1-324 a spoke's node on another cycle's event", "-9*y*z^5 + 3/7*x^5*z + 3*x^2*y^2*z - 4*y^3",
+     ((-1.0, 1.0), (-0.5, 0.5), (-0.5, 0.5)), 8, 64),
     # The origin is the only singular point (sympy's Groebner basis of
     # F, grad F: x + ..., y^5, z^3), a non-simple germ ~ x^2 - y^6 - z^4
     # (corank 2, zero cubic).  F and grad F are below 1e-12 up to 4e-3 from
