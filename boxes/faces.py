@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 from .edges import Events
@@ -159,6 +160,12 @@ def square_events(events: Events, squares):
 def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     """Pair the events of each square according to its mode.
 
+    In boundary mode (2) each start goes with the next end, unless two
+    consecutive events are one corner of the square seen from its two
+    edges (``inc["corner"]``, the same ``inc["key"]``): they are paired
+    (see :func:`_corner_events`), and so the others with their neighbours
+    on that parity.
+
     Returns
     -------
     link_square, start, end : (K,) int64
@@ -179,6 +186,18 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     first_start[has] = is_start[offset[has]]
     shift = np.where((mode == 2) & ~first_start & has, 1, 0)
     rank = np.arange(len(sq)) - offset[sq]
+    if "corner" in inc:
+        # The next incidence round the square's boundary (cyclically).
+        corner, key = inc["corner"][order], inc["key"][order]
+        nxt = offset[sq] + (rank + 1) % np.maximum(counts[sq], 1)
+        pair = corner & corner[nxt] & (key == key[nxt]) & (nxt != np.arange(len(sq))) & (mode[sq] == 2)
+        if pair.any():
+            want = np.full(n_squares, -1, np.int64)
+            np.maximum.at(want, sq[pair], rank[pair] % 2)
+            other = np.full(n_squares, 2, np.int64)
+            np.minimum.at(other, sq[pair], rank[pair] % 2)
+            agree = (want >= 0) & (want == other)   # pairs asking for different parities: the rule
+            shift = np.where(agree, want, shift)
     slot = (rank - shift[sq]) % np.maximum(counts[sq], 1)
     ok = ~bad[sq]
     sq, ev, is_start, slot = sq[ok], ev[ok], is_start[ok], slot[ok]
@@ -232,6 +251,8 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
         inc = square_events(events, squares)
     counts = np.bincount(inc["sq"], minlength=len(squares))
     mode = graph_modes(surface, tree, squares, owner, owner_side, which=counts >= (2 if tubes else 3))
+    inc["key"] = events.key[inc["ev"]]
+    inc["corner"] = _corner_events(surface, events, squares, inc, (mode == 2) & (counts >= 4))
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     # A graph pairing that does not alternate start/end means rounding
     # defeated the sign test: pair those squares along the boundary instead.
@@ -241,6 +262,34 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
+
+
+def _corner_events(surface: Surface, events: Events, squares, inc: dict, which: np.ndarray) -> np.ndarray:
+    """Per incidence: an event at a corner of its square where F's gradient
+    in the square's plane is not zero (only on the squares ``which``).
+
+    A corner has two events in a square when F is zero there and negative
+    along both edges from it (the rule F + eps of :mod:`.edges`); with a
+    tangential gradient, F is then negative in the whole square near the
+    corner (a sheet through a lattice line, tangent to a face along it), and
+    F + eps = 0 is an arc round the corner from one event to the other:
+    a link of its own.  Where that gradient vanishes (a singular point of
+    the face's curve), branches may leave the corner into the square.
+    """
+    sq = inc["sq"]
+    n, _, u0, v0, size = squares[sq].T
+    at = (events.snapped[inc["ev"]] & which[sq]
+          & ((inc["u"] == u0) | (inc["u"] == u0 + size)) & ((inc["v"] == v0) | (inc["v"] == v0 + size)))
+    out = np.zeros(len(sq), bool)
+    idx = np.nonzero(at)[0]
+    if len(idx) == 0:
+        return out
+    p = events.point[inc["ev"][idx]]
+    g = np.abs(surface.gradient(p))
+    rounding = tol.ZERO_ULPS * np.finfo(float).eps * surface.gradient_magnitude(p)
+    tangential = (g > rounding) & (np.arange(3)[None, :] != n[idx, None])
+    out[idx] = tangential.any(axis=1)
+    return out
 
 
 def _of_squares(inc: dict, keep: np.ndarray) -> dict:

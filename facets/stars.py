@@ -19,7 +19,7 @@ from singmesh import tolerances as tol
 from singmesh.boxes.octree import Octree, containing_leaves
 
 
-def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
+def star_cubes(tree: Octree, links, points: np.ndarray, curve_points: np.ndarray | None = None) -> np.ndarray:
     """A lattice cube around each singular point: its star.
 
     The cube holds the connected set (across shared faces) of leaves that
@@ -34,6 +34,10 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
     links : FaceLinks or LeafSides (its ``minus``/``plus`` leaves give the adjacency;
         only that among the leaves that failed the simplicity test is used)
     points : (k, 3) ndarray
+    curve_points : (c, 3) ndarray, optional
+        Points of the curves of singular points: a cube reaches at most
+        half-way to them too (the cone over its boundary is the surface
+        only without a curve in it; their tube takes the leaves round them).
 
     Returns
     -------
@@ -68,6 +72,11 @@ def star_cubes(tree: Octree, links, points: np.ndarray) -> np.ndarray:
         # up, and would otherwise make every cube meet its neighbours').
         gap, _ = cKDTree(p).query(p, k=2, p=np.inf)
         radius = np.minimum(radius, np.maximum(1.0, (gap[:, 1] - 2.0) / 2.0))
+    if curve_points is not None and len(curve_points) and k:
+        # (fuzz s1-674: the double curve of a plane and a cone 0.36 from
+        # its node ran 8 cells from it, through the star cube.)
+        gap, _ = cKDTree((np.asarray(curve_points, float) - tree.box[:, 0]) / tree.cell).query(p, p=np.inf)
+        radius = np.minimum(radius, np.maximum(1.0, (gap - 2.0) / 2.0))
     cubes = np.stack([np.clip(np.floor(p - radius[:, None]), 0, top),
                       np.clip(np.ceil(p + radius[:, None]), 0, top)], axis=1).astype(np.int64)
     small = np.stack([np.floor(p - 1), np.ceil(p + 1)], axis=1).astype(np.int64)

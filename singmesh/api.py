@@ -284,7 +284,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # The stars grow along the adjacency of the leaves that failed the
         # simplicity test alone: this tree's events and links would be
         # replaced by the refined tree's.
-        cubes = star_cubes(tree, leaf_sides(tree, np.nonzero(~tree.simple)[0]), centres)
+        cubes = star_cubes(tree, leaf_sides(tree, np.nonzero(~tree.simple)[0]), centres,
+                           curves.points if len(curves.points) else None)
     else:
         cubes = None
         events = compute_events(surf, tree)

@@ -118,6 +118,12 @@ SLIVER_AREA = 1e-6
 #: A skeleton curve crossing a star's link cycle within this fraction of
 #: a link's length from one of its ends passes through that vertex.
 NODE_ON_VERTEX = 0.05
+#: ... and a node within this fraction of the link's length of another
+#: vertex of the cycle is that vertex's place (the same point on two
+#: squares of different sizes), not a node of its own: far below any
+#: distance between two vertices of one cycle (a vertex 1e-31 beside an
+#: event made a pair of vertices closer than 1e-9 of the box).
+NODE_ON_OTHER = 1e-9
 
 #: Largest half-side of a star cube, as a fraction of the domain.  A star
 #: holds the leaves near its point that failed the simplicity test (along a

@@ -19,7 +19,15 @@ D_k, k > 4  g_XX = g_XY = 0         (cubic X^2 Y)
 E6          g_XX = g_YYY = 0        (X^3 + Y^4)
 E7          g_XX = g_XYY = 0        (X^3 + X Y^3)
 E8          g_XX = g_YYYY = 0       (X^3 + Y^5)
+X9 or worse all of g's 2- and 3-jet = 0 (corank 2, the cubic vanishes)
+P8 or worse all of F's 2-jet = 0      (corank 3)
 ==========  =========================================================
+
+The last two are non-simple: F and grad F vanish to the precision of the
+input over a wide region around them (|grad F| ~ d^5 a distance d from
+x^2 + y^6 + z^4: 1e-12 up to 4e-3 away), where a point reads as a simpler
+type (an E6) and stays put; without a centre of their own every start in
+that region was a "singular point" of its own.
 
 At an exact singular point all of them hold, so the centre of a rounded
 polynomial lies within the rounding (divided by the leading coefficient)
@@ -38,7 +46,7 @@ from numpy.polynomial import polynomial as P
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
-from .classify import Frame, SingularityType, analyse
+from .classify import NOTE_CORANK3, NOTE_ZERO_CUBIC, Frame, SingularityType, analyse
 from .splitting import compose, derivative, split
 
 #: Derivatives of g (in the frame's kernel coordinates) that vanish at the
@@ -51,8 +59,18 @@ _CONDITIONS = {
 }
 
 
+#: Non-simple classes with a centre: g is F itself (corank 3) or the
+#: residual in the two kernel variables (corank 2).
+_NON_SIMPLE = {
+    NOTE_CORANK3: [a for a in np.ndindex(3, 3, 3) if sum(a) == 2],
+    NOTE_ZERO_CUBIC: [a for a in np.ndindex(4, 4) if sum(a) in (2, 3)],
+}
+
+
 def conditions(t: SingularityType) -> list[tuple[int, ...]] | None:
     """Multi-indices of the derivatives of g that vanish at the centre, or None."""
+    if t.name == "non-simple":
+        return _NON_SIMPLE.get(t.note)
     if t.milnor is None or t.name == "A1":
         return None
     if t.name.startswith("A"):
@@ -69,22 +87,32 @@ def _derivative_at(c: np.ndarray, alpha: tuple[int, ...], sigma: np.ndarray) -> 
             d = derivative(d, axis)
     if c.ndim == 1:
         return float(P.polyval(sigma[0], d))
+    if c.ndim == 3:
+        return float(P.polyval3d(sigma[0], sigma[1], sigma[2], d))
     return float(P.polyval2d(sigma[0], sigma[1], d))
 
 
 def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Frame) -> np.ndarray | None:
     """The shift from ``p`` to the centre of its singular point, to first order.
 
-    Returns None for points that have nothing to centre (A1, non-simple).
+    Returns None for points that have nothing to centre (A1, non-simple
+    beyond :data:`_NON_SIMPLE`).
     """
     alphas = conditions(t)
-    if alphas is None or frame.corank not in (1, 2):
+    if alphas is None or frame.corank != len(alphas[0]):
         return None
     m = frame.corank
     N = max(frame.order, max(sum(a) for a in alphas) + 2)
     T = surface.taylor(p)
+    if t.name == "non-simple":
+        # Its type is not known, nor the order that matters (the x^6 of
+        # y^2 z + x^6 - 3 z^6): the whole jet, or the step may lead away.
+        N = max(N, T.shape[0] - 1)
     G = compose(T, np.zeros(3), frame.basis, N)
-    g, phis = split(G, m, frame.eigenvalues[m:], N, critical=False)
+    if m == 3:
+        g, phis = G, []  # nothing to split off
+    else:
+        g, phis = split(G, m, frame.eigenvalues[m:], N, critical=False)
     K = np.eye(m) if frame.kernel is None else frame.kernel
     gk = compose(g, np.zeros(m), K, N) if m == 2 else g
     sigma = np.zeros(m)
@@ -94,7 +122,14 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
                        for j in range(m)] for a in alphas])
         if not (np.isfinite(c).all() and np.isfinite(J).all()):
             return None
-        d, *_ = np.linalg.lstsq(J, c, rcond=None)
+        if t.name == "non-simple":
+            # Directions of very different orders (y^6 beside z^4): their
+            # columns differ by more than lstsq's rcond and the slow one
+            # would be cut; solved with unit columns, each goes on.
+            cols = np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+            d = np.linalg.lstsq(J / cols, c, rcond=None)[0] / cols
+        else:
+            d, *_ = np.linalg.lstsq(J, c, rcond=None)
         sigma = sigma - d
         if np.abs(d).max() <= 1e-3 * np.finfo(float).eps * max(np.abs(sigma).max(), 1e-300):
             break
@@ -103,7 +138,7 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
         w = [P.polyval(uv[0], phi) for phi in phis]
     else:
         w = [P.polyval2d(uv[0], uv[1], phi) for phi in phis]
-    return frame.basis[:, :m] @ uv + frame.basis[:, m:] @ np.asarray(w, dtype=float)
+    return frame.basis[:, :m] @ uv + frame.basis[:, m:] @ np.asarray(w, dtype=float).reshape(3 - m)
 
 
 def residual(surface: Surface, x: np.ndarray) -> np.ndarray:

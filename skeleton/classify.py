@@ -108,6 +108,13 @@ from .splitting import compose, degree_grid, derivative, mul, series_order, spli
 __all__ = ["SingularityType", "NotSingularError", "Frame", "analyse", "analyse_each", "classify", "classify_command"]
 
 
+#: The notes of the two non-simple classes whose centre is regular to find
+#: (:mod:`singmesh.skeleton.centre`): the whole 2-jet, or the kernel's 2-
+#: and 3-jet, vanishes there.
+NOTE_CORANK3 = "corank 3 (type P8 or worse)"
+NOTE_ZERO_CUBIC = "corank 2 and the cubic term vanishes (type X9 or worse)"
+
+
 class NotSingularError(SurfaceError):
     """The given point is not a singular point of the surface."""
 
@@ -350,7 +357,7 @@ def analyse(s: Surface, p: np.ndarray, rank_rtol: float = CLASSIFY_RANK_RTOL,
         return _a1(lam, vec, common), Frame(**frame)
     if corank == 3:
         return SingularityType(name="non-simple", real_form=None, milnor=None, branches=None,
-                               axis=None, note="corank 3 (type P8 or worse)", **common), Frame(**frame)
+                               axis=None, note=NOTE_CORANK3, **common), Frame(**frame)
 
     tol = jet_rtol * S
     mu = lam[corank:]
@@ -498,8 +505,7 @@ def _corank2(g, mu, tol, N, common, frame) -> SingularityType | None:
     norm = max(abs(a), abs(b), abs(c), abs(d))
     sign_mu = math.copysign(1.0, mu[0])
     if norm <= tol:
-        return _make("non-simple", None, None, None, None, common,
-                     note="corank 2 and the cubic term vanishes (type X9 or worse)")
+        return _make("non-simple", None, None, None, None, common, note=NOTE_ZERO_CUBIC)
     disc = b * b * c * c - 4 * a * c ** 3 - 4 * b ** 3 * d - 27 * a * a * d * d + 18 * a * b * c * d
     # |disc| / norm^3 estimates the distance of the cubic from the cubics
     # with a multiple line, in units of a coefficient: compare with tol.

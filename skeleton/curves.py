@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
@@ -307,6 +308,20 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
             on_b = ok & ~on_a & (np.linalg.norm(node - b, axis=1) <= near)
             node[on_a], t[on_a], vertex[on_a] = a[on_a], 0.0, idx[on_a]
             node[on_b], t[on_b], vertex[on_b] = b[on_b], 1.0, (idx[on_b] + 1) % sizes[cyc[on_b]]
+            # A node on a vertex of another link of its star's cycles (the
+            # link's square reaches an event of a smaller square beside it,
+            # fuzz s1-324: a 2-event cycle's node on another cycle's event)
+            # would be a second vertex at that event's place: no spoke there.
+            loose = np.nonzero(ok & (vertex < 0))[0]
+            if len(loose):
+                stars: dict = {}
+                for jb in jobs:
+                    stars.setdefault(np.asarray(jb[0], float).tobytes(), []).append(np.asarray(jb[1], float))
+                stars = {key: cKDTree(np.concatenate(v).reshape(-1, 3)) for key, v in stars.items()}
+                for k in loose.tolist():
+                    star = stars[np.asarray(jobs[active[int(cyc[k])]][0], float).tobytes()]
+                    d, _ = star.query(node[k], p=np.inf)
+                    ok[k] = not d <= tol.NODE_ON_OTHER * near[k] / tol.NODE_ON_VERTEX
             centre = np.array([jobs[active[j]][0] for j in cyc.tolist()], float).reshape(-1, 3)
             trace, traced = np.zeros((len(cyc), 2, 3)), np.zeros(len(cyc), bool)
             if ok.any():

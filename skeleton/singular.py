@@ -119,6 +119,14 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
         # A start that left F's domain or overflowed (exp of a large
         # argument) has no step: it becomes NaN and stops.
         finite = np.isfinite(j).all(axis=(1, 2)) & np.isfinite(r).all(axis=1)
+        if across is not None:
+            # Least squares in the plane across: the Jacobian's columns
+            # projected onto it.  (A step of the whole space with its part
+            # along ``across`` dropped does not converge where the curve's
+            # tangent is not ``across``: near it the step along the tangent
+            # is large, and its remainder across is not small.)
+            a = across[live]
+            j = j - np.einsum("kij,kj,kl->kil", j, a, a)
         if finite.all():
             step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
         else:
@@ -251,7 +259,8 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
             # Starts of a degenerate point spread over its region (up to
             # ~eps^(1/(k+1))): those closer than a few times this one's
             # distance centre to the same point.
-            reach = 4.0 * float(np.linalg.norm(q - p)) if (kind.milnor or 0) > 1 else 0.0
+            # (Non-simple ones, Milnor number not found, too.)
+            reach = 4.0 * float(np.linalg.norm(q - p)) if kind.milnor is None or kind.milnor > 1 else 0.0
             regions.append((q, max(reach, tol.SINGULAR_MERGE * size.max())))
             found.append(SingularPoint(point=q, residual=r, hessian_rank=3 - kind.corank,
                                        signature=kind.hessian_signature, classification=kind))
