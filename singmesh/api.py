@@ -396,7 +396,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
-    for note in m.singular_point_warnings():
+    for note in m.singular_point_warnings() + m.curve_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
     for note in m.crease_warnings():
         warnings.warn(note, CreaseWarning, stacklevel=3)

@@ -392,6 +392,13 @@ class Mesh:
                                                 for s in wrong[:5]) + (" ..." if len(wrong) > 5 else ""))
         return out
 
+    def curve_warnings(self) -> list[str]:
+        """A curve of singular points found in the box but not traced (so not meshed right): one line, or none."""
+        if not self.stats.get("untraced_curve"):
+            return []
+        return ["F has a curve of singular points in the box that could not be traced; "
+                "near it the mesh is not right"]
+
     def crease_warnings(self) -> list[str]:
         """Curves where F = 0 is not smooth that the mesh does not follow (roots of |u|): one line, or none."""
         roots = self.stats.get("unfollowed_creases", [])
@@ -404,11 +411,7 @@ class Mesh:
 
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""
-        out = self.singular_point_warnings()
-        if self.stats.get("untraced_curve"):
-            out.append("F has a curve of singular points in the box that could not be traced; "
-                       "near it the mesh is not right")
-        out += self.crease_warnings()
+        out = self.singular_point_warnings() + self.curve_warnings() + self.crease_warnings()
         if self.stats.get("speck_triangles"):
             out.append(f"two sheets of F = 0 come closer than a cell: {self.stats['speck_triangles']} triangles "
                        "of closed specks between them were dropped (no extremum of F inside); there the mesh "
