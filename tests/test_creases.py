@@ -11,6 +11,7 @@ with vertices on the surface.
 """
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -512,10 +513,14 @@ def test_a_refusal_after_raising_fine_for_creases_says_so():
         singmesh.mesh(eq, box=[[-1.2, 1.2]] * 3, coarse=8, fine=16, max_memory="60MB")
     text = str(e.value)
     assert "\n" not in text and "over max_memory" in text
-    assert "fine was raised from 16 to 128 for creases 0 fine cells apart" in text and "coplanar faces" in text
+    # (How far apart the traces of this 4-cells-wide L are at fine 16 is
+    # not the point: 0 while coincident kinks split each other's traces.)
+    assert re.search(r"fine was raised from 16 to 128 for creases [0-9.e-]+ fine cells apart at fine 16", text)
+    assert "coplanar faces" in text
 
 
-def test_boxes_with_coplanar_faces_joined_by_min():
+@pytest.mark.parametrize("seed", [None, 7])
+def test_boxes_with_coplanar_faces_joined_by_min(seed):
     # An L of two boxes, u in [-0.8, 0.8] x [-0.3, 0.3] and [-0.8, -0.2] x
     # [-0.3, 1.0] (z in [-0.3, 0.3] both), the common way to write it: their
     # faces u = -0.8, v = -0.3 and w = +-0.3 are coplanar.  There the two
@@ -523,7 +528,12 @@ def test_boxes_with_coplanar_faces_joined_by_min():
     # 0 apart, and fine raised to 2048 until memory was refused), and on
     # the common face plane the Min of the two boxes is tied to rounding, so
     # the inner kinks of a box seemed active inside a flat face.
-    rot = np.eye(3)
+    # Float-rotated, the coincident kinks' equations have common zeros all
+    # along the edge: each trace stopped at a "corner" with the other kink a
+    # few steps on (Gauss-Newton on both lands anywhere on the line), and the
+    # corners of ends placed on one point were left apart (creases 0 apart,
+    # fine raised to 4096: 165 s).
+    rot = np.eye(3) if seed is None else _rotation(seed)
     L = [_lin(row) for row in rot]
     eq = ("Min(Max(Abs({0})-0.8, Abs({1})-0.3, Abs({2})-0.3), "
           "Max(Abs({0}+0.5)-0.3, Abs({1}-0.35)-0.65, Abs({2})-0.3))").format(*L)
@@ -535,8 +545,6 @@ def test_boxes_with_coplanar_faces_joined_by_min():
     pairs = [(a, b) for a, b in itertools.combinations(planes, 2) if a[:len(L[0])] != b[:len(L[0])]]
     pairs += [(p, f"{L[2]}{s}0.3") for p in planes for s in "+-"]
     box = np.array([[-1.2, 1.2]] * 3)
-    # (Float-rotated, the creases are still read as too close and fine is
-    # raised to its limit, as before: not yet right.)
     m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
     assert m.stats["fine"] == 64
     _check_mesh(m, eq, box, closed=True)
