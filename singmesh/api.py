@@ -323,7 +323,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     key0 = curve_key0(events)
     if len(curves.points):
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
-                                              tube_id, key0, float(cell.max()), b)
+                                              tube_id, key0, float(cell.max()), b,
+                                              surf if len(creases.points) else None)
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)
