@@ -95,8 +95,13 @@ def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
                         tangent_radius(curves), balls(curves, MEET_KINDS))
 
 
-def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray):
-    """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``."""
+def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray,
+                   surface=None):
+    """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``.
+
+    With ``surface`` (F with kinks), a rail on a patch of F = 0 across
+    which F keeps its sign (:func:`sign_kept`) gets no strip.
+    """
     ends = np.array([v for v, sp in zip(curves.special_vertex.tolist(), curves.special)
                      if sp.kind == "end on the box"], np.int64)
     # The tube's links on the box's faces continue the rails where a
@@ -128,12 +133,62 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     if len(folds):
         turns = cKDTree(curves.points[folds]).query(curves.points)[0] <= (
             tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW) * cell
-    return strip_triangles(rails(grouped, links, tube_id, far), events.point, events.key, curves.points,
+    rail_list = rails(grouped, links, tube_id, far)
+    if surface is not None and rail_list:
+        # Where two solids joined by Min touch along a face (two boxes
+        # stacked), the contact patch is F = 0 with F < 0 on both sides:
+        # not the union's boundary, which is meshed where F changes sign.
+        # Its zeros on split planes still make links, and at the concave
+        # rim round it a rail on the patch would be zipped to the rim's
+        # crease as a third half-sheet.
+        rail_list = _off_patches(rail_list, sign_kept(surface, events.point, cell))
+    return strip_triangles(rail_list, events.point, events.key, curves.points,
                            curves.edges, key0 + np.arange(len(curves.points)), ends,
                            reach=4.0 * (tol.CURVE_BALL_GROW + 2) * cell, box=box,
                            steady=steady if steady.any() else None, turns=turns,
                            stub=tol.CURVE_RAIL_STUB * cell,
                            near=radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL + tol.CURVE_FACE_GAP, cell=cell)
+
+
+def _off_patches(rail_list: list, kept: np.ndarray) -> list:
+    """The rails without their events on patches where F keeps its sign (``kept``, per event).
+
+    A rail wholly on such a patch goes; one that runs onto it from a
+    sheet of the surface (the patch's links join the side face's at the
+    tube's boundary) is cut into its runs off the patch.
+    """
+    out = []
+    for ev, closed in rail_list:
+        k = kept[ev]
+        if not k.any():
+            out.append((ev, closed))
+            continue
+        if closed:
+            # Start the loop on the patch, so that no run wraps round.
+            first = int(np.argmax(k))
+            ev, k = np.roll(ev, -first), np.roll(k, -first)
+        off = np.nonzero(~k)[0]
+        for run in np.split(off, np.nonzero(np.diff(off) > 1)[0] + 1):
+            if len(run) > 1:
+                out.append((ev[run], False))
+    return out
+
+
+def sign_kept(surface, points: np.ndarray, cell: float) -> np.ndarray:
+    """(k,) bool: F has one sign a quarter cell to either side of the surface at the points (along grad F).
+
+    A point on a patch of F = 0 without sign change (two solids of a Min
+    touching along a face, F < 0 on both sides); where grad F is zero or
+    undefined, False.
+    """
+    p = np.asarray(points, float).reshape(-1, 3)
+    with np.errstate(all="ignore"):
+        g = surface.gradient(p)
+        n = g / np.linalg.norm(g, axis=1, keepdims=True)
+        step = tol.SIGN_KEPT_STEP * cell * n
+        a, b = surface(p + step), surface(p - step)
+    ok = np.isfinite(n).all(axis=1) & np.isfinite(a) & np.isfinite(b)
+    return ok & (((a < 0) & (b < 0)) | ((a > 0) & (b > 0)))
 
 
 def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarray, cell: float,

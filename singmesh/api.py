@@ -31,7 +31,7 @@ from singmesh.skeleton.tips import root_creases, tip_points
 from . import tolerances as tol
 from .errors import SurfaceError
 from .memory import Budget, MemoryBudgetError, parse_size
-from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning
+from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning, cuspidal_crease_refusal
 from .squarefree import squarefree
 from .surface import Surface
 
@@ -228,8 +228,11 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         creases = crease_curves(surf, b, step=float(cell.max()))
     curves = merge_curve_sets(curves, creases)
     # A root of |u| along a curve of the surface (|x|^0.5 + ...) is a
-    # cuspidal crease that is not traced: said, not silently meshed wrong.
+    # cuspidal crease that is not traced: the mesh would have open edges
+    # all along it, so the surface is refused, with where.
     unfollowed = [(name, p.tolist()) for name, p in root_creases(surf, b)]
+    if unfollowed:
+        raise SurfaceError(cuspidal_crease_refusal(unfollowed))
     t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
     # Points on the curves are their special points (pinch and triple
@@ -321,7 +324,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     key0 = curve_key0(events)
     if len(curves.points):
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
-                                              tube_id, key0, float(cell.max()), b)
+                                              tube_id, key0, float(cell.max()), b,
+                                              surf if len(creases.points) else None)
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)

@@ -899,7 +899,19 @@ class _Kink(CreaseSystem):
             d = np.stack(point_eval(g, self._other, p), 1)
             gi, gj = d[:, :3], d[:, 3:]
             jump = np.linalg.norm(gi - gj, axis=1)
-            ok &= jump > tol.CREASE_JUMP * (np.linalg.norm(gi, axis=1) + np.linalg.norm(gj, axis=1))
+            size = np.linalg.norm(gi, axis=1) + np.linalg.norm(gj, axis=1)
+            differ = jump > tol.CREASE_JUMP * size
+            if self._tie:
+                # A Max/Min inside an enclosing Min tied to rounding along
+                # a whole face (coplanar faces of two boxes joined by Min,
+                # float-rotated): there the enclosing Min picks the other
+                # box for both pieces at random, and the jump of F's pieces
+                # comes and goes along the edge.  The tied arguments' own
+                # gradients (grad G2) differ there; whether F's does is
+                # asked a step to either side below.
+                _, dv = self.values(p)
+                differ |= np.linalg.norm(dv[:, 1], axis=1) > tol.CREASE_JUMP * size
+            ok &= differ
             # ... and F's own gradient a step to either side of the tie
             # does too: where an enclosing Min or Max is tied to rounding
             # with an argument of the same gradient (coplanar faces of two

@@ -116,6 +116,15 @@ def unit_normals(g: np.ndarray) -> np.ndarray:
     return np.where(ok, g / np.where(ok, norm, 1), 0.0)
 
 
+def cuspidal_crease_refusal(roots: list) -> str:
+    """The one line refusing a surface with cuspidal creases: ``roots`` is (name, point) per crease."""
+    name, p = roots[0]
+    return (f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
+            f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}), from "
+            f"{name}): singmesh does not mesh such creases (the mesh would be open along them); "
+            "a power p >= 1 of |u| is differentiable there")
+
+
 @dataclass
 class Mesh:
     """A triangle mesh of a surface F = 0 inside a box.

@@ -661,6 +661,13 @@ CREASE_ONTO = 0.5
 #: radius of 12 steps); distinct creases a step apart are far above.
 CREASE_SAME = 0.05
 
+#: A tube's rail lies on a patch of F = 0 without sign change (two solids
+#: of a Min touching along a face) where F has one sign this many fine
+#: cells to either side of it: the rails are a few cells from the crease,
+#: where the two half-sheets of a crease are cells apart, and a sheet's
+#: own zeros are a cell or more from the next sheet.
+SIGN_KEPT_STEP = 0.25
+
 #: Two crease traces passing closer than this many trace steps, away from
 #: their ends, cross: they are cut there and the crossing is a corner
 #: (two equal cylinders joined by Min cross along a crease with a double

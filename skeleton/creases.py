@@ -145,9 +145,39 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, ne
         # pass the corner, where Newton on this crease alone may fail).
         if z is None or np.linalg.norm(z - x) > d + h or np.dot(z - x, y - x) <= 0:
             continue
-        if other.active(z[None])[0]:
+        if other.active(z[None])[0] and not _runs_along(systems, si, sj, z, y - x, h):
             return z
     return None
+
+
+def _runs_along(systems: list, si: int, sj: int, z: np.ndarray, ahead: np.ndarray, h: float) -> bool:
+    """Whether crease ``si`` goes on through z (in the direction ``ahead``) past kink ``sj``: no corner.
+
+    Crease si goes on when it is still active half a step on.  Then sj
+    makes no corner at z if it runs along si (its equations vanish half a
+    step from z along si, on either side: two kinks along one curve, as
+    the coincident edges of two boxes with coplanar faces joined by Min,
+    whose common zeros Gauss-Newton finds anywhere on the line) or if its
+    own crease is active at z alone, not half a step from z along it on
+    either side (an edge of one box lying in a face of the other, whose
+    end is on si).  Their gradients do not tell: on a tie of coplanar
+    faces they are the pieces rounding picks.
+    """
+    # (Along the trace's step: at z the tangents are the pieces rounding
+    # picks too.  A point Newton takes back to z tells nothing.)
+    t = ahead / np.linalg.norm(ahead)
+    q, ok = _newton(systems[si], z + 0.5 * h * np.array([t, -t]), h)
+    ok &= np.linalg.norm(q - z, axis=1) >= 0.25 * h
+    if not ok[0] or not systems[si].active(q[:1])[0]:
+        return False
+    v, g = systems[sj].values(q[ok])
+    size = np.linalg.norm(g, axis=2) * np.maximum(np.abs(q[ok]).max(axis=1), 1.0)[:, None]
+    if np.any(np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)):
+        return True
+    tj = _tangent(systems[sj], z)[0]
+    r, ok = _newton(systems[sj], z + 0.5 * h * np.array([tj, -tj]), h)
+    ok &= np.linalg.norm(r - z, axis=1) >= 0.25 * h
+    return not (ok & systems[sj].active(r)).any()
 
 
 def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float,
@@ -843,6 +873,11 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
             comp = sorted(comp)
             which = sorted({lines[line_of[v]][0] for v in comp})
             x = _corner(systems, which, P[comp].mean(axis=0), h) if len(comp) > 1 else None
+            if x is None and len(comp) > 1 and np.ptp(P[comp], axis=0).max() <= tol.CREASE_SAME * h:
+                # Ends at one point already (traces that met there) of kinks
+                # running along one line (coincident box edges): Gauss-Newton
+                # on all their equations is singular, and the point is theirs.
+                x = P[comp[0]].copy()
             if x is None:
                 for v in comp:
                     special[v] = "end of the trace" if how_of[v] == "lost" else "end of a crease"

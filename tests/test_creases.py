@@ -11,6 +11,7 @@ with vertices on the surface.
 """
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -512,10 +513,14 @@ def test_a_refusal_after_raising_fine_for_creases_says_so():
         singmesh.mesh(eq, box=[[-1.2, 1.2]] * 3, coarse=8, fine=16, max_memory="60MB")
     text = str(e.value)
     assert "\n" not in text and "over max_memory" in text
-    assert "fine was raised from 16 to 128 for creases 0 fine cells apart" in text and "coplanar faces" in text
+    # (How far apart the traces of this 4-cells-wide L are at fine 16 is
+    # not the point: 0 while coincident kinks split each other's traces.)
+    assert re.search(r"fine was raised from 16 to 128 for creases [0-9.e-]+ fine cells apart at fine 16", text)
+    assert "coplanar faces" in text
 
 
-def test_boxes_with_coplanar_faces_joined_by_min():
+@pytest.mark.parametrize("seed", [None, 7])
+def test_boxes_with_coplanar_faces_joined_by_min(seed):
     # An L of two boxes, u in [-0.8, 0.8] x [-0.3, 0.3] and [-0.8, -0.2] x
     # [-0.3, 1.0] (z in [-0.3, 0.3] both), the common way to write it: their
     # faces u = -0.8, v = -0.3 and w = +-0.3 are coplanar.  There the two
@@ -523,7 +528,12 @@ def test_boxes_with_coplanar_faces_joined_by_min():
     # 0 apart, and fine raised to 2048 until memory was refused), and on
     # the common face plane the Min of the two boxes is tied to rounding, so
     # the inner kinks of a box seemed active inside a flat face.
-    rot = np.eye(3)
+    # Float-rotated, the coincident kinks' equations have common zeros all
+    # along the edge: each trace stopped at a "corner" with the other kink a
+    # few steps on (Gauss-Newton on both lands anywhere on the line), and the
+    # corners of ends placed on one point were left apart (creases 0 apart,
+    # fine raised to 4096: 165 s).
+    rot = np.eye(3) if seed is None else _rotation(seed)
     L = [_lin(row) for row in rot]
     eq = ("Min(Max(Abs({0})-0.8, Abs({1})-0.3, Abs({2})-0.3), "
           "Max(Abs({0}+0.5)-0.3, Abs({1}-0.35)-0.65, Abs({2})-0.3))").format(*L)
@@ -535,8 +545,6 @@ def test_boxes_with_coplanar_faces_joined_by_min():
     pairs = [(a, b) for a, b in itertools.combinations(planes, 2) if a[:len(L[0])] != b[:len(L[0])]]
     pairs += [(p, f"{L[2]}{s}0.3") for p in planes for s in "+-"]
     box = np.array([[-1.2, 1.2]] * 3)
-    # (Float-rotated, the creases are still read as too close and fine is
-    # raised to its limit, as before: not yet right.)
     m = singmesh.mesh(eq, box=box, coarse=16, fine=64)
     assert m.stats["fine"] == 64
     _check_mesh(m, eq, box, closed=True)
@@ -548,3 +556,45 @@ def test_boxes_with_coplanar_faces_joined_by_min():
     # ... and every edge of the L (the stretches of the planes' lines on its outline: the lines run
     # on through flat faces) is on crease edges with two triangles each.
     _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, corners.T).T, starts=1500, on=(a, b))
+
+
+@pytest.mark.parametrize("seed", [None])
+def test_stacked_boxes_touching_along_a_face(seed):
+    # A box standing on a larger one, joined by Min: |u|, |v| <= 0.6,
+    # w in [-0.4, 0] and |u|, |v| <= 0.3, w in [0, 0.4].  The contact patch
+    # (w = 0, |u|, |v| < 0.3) is F = 0 with F < 0 on both sides: inside the
+    # union, not its boundary, which is meshed where F changes sign.  The
+    # patch's zeros on the split plane w = 0 made rails in the tube round the
+    # concave rim, zipped to the rim as a third half-sheet (292 triangles on
+    # the patch, 108 non-manifold edges, chi 75 at fine 256; with the retry
+    # 688 open edges at 512).  The union's boundary: closed, chi 2, the rim
+    # a crease with two triangles per edge.
+    rot = np.eye(3) if seed is None else _rotation(seed)
+    L = [_lin(row) for row in rot]
+    eq = ("Min(Max(Abs({0})-0.6, Abs({1})-0.6, Abs({2}+0.2)-0.2), "
+          "Max(Abs({0})-0.3, Abs({1})-0.3, Abs({2}-0.2)-0.2))").format(*L)
+    box = np.array([[-1.2, 1.2]] * 3)
+    # (At fine 128 alone 16 edges are still open round the patch: the
+    # strips fail and the mesh is made again at 256.)
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=256)
+    _check_mesh(m, eq, box, closed=True)
+    V, T = m.vertices, m.faces
+    # No triangle on the contact patch (inside the union).
+    c = V[T].mean(axis=1) @ rot.T
+    assert not np.any((np.abs(c[:, 2]) < 1e-9) & (np.abs(c[:, :2]).max(axis=1) < 0.3)), "triangles on the patch"
+    # Every edge of both boxes, and the rim, is on crease edges with two triangles each; the
+    # corners are vertices.
+    corners = [[a, b, c] for a in (-0.6, 0.6) for b in (-0.6, 0.6) for c in (-0.4, 0.0)]
+    corners += [[a, b, c] for a in (-0.3, 0.3) for b in (-0.3, 0.3) for c in (0.0, 0.4)]
+    low = [f"{L[0]}+0.6", f"{L[0]}-0.6", f"{L[1]}+0.6", f"{L[1]}-0.6", f"{L[2]}+0.4", f"{L[2]}"]
+    high = [f"{L[0]}+0.3", f"{L[0]}-0.3", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[2]}", f"{L[2]}-0.4"]
+    pairs = [(a, b) for faces in (low, high) for i, a in enumerate(faces) for b in faces[i + 1:]
+             if a[:len(L[0])] != b[:len(L[0])]]
+    # The 12 edges of each box (the lines of the pairs run on in the flat faces).
+    ends = [(np.array(p, float), np.array(q, float)) for k in (0, 8) for i, p in enumerate(corners[k:k + 8])
+            for q in corners[k + i + 1:k + 8] if np.sum(np.array(p) != np.array(q)) == 1]
+    assert len(ends) == 24
+    a = np.linalg.solve(rot, np.array([e[0] for e in ends]).T).T
+    b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
+    _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, np.array(corners, float).T).T, starts=1500,
+                         on=(a, b))

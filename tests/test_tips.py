@@ -116,16 +116,23 @@ def test_classifying_a_tip_says_it_has_no_jet():
     ("abs(x)^0.5 + abs(y)^0.5 + abs(z)^0.5 - 1", 3),   # the star superquadric: 3 planes of cusps
     ("sqrt(abs(x - 0.1)) + y^2 + z^2 - 0.5", 1),
 ])
-def test_a_root_vanishing_along_a_curve_is_said(text, count):
+def test_a_root_vanishing_along_a_curve_is_refused(text, count):
     # |u|^p (p < 1) vanishing along a curve of the surface makes a cuspidal
-    # crease that is not traced: the mesh must say so, not look right.
-    with pytest.warns(singmesh.CreaseWarning, match="not differentiable along .* curve"):
-        m = singmesh.mesh(text, [[-1.2, 1.2]] * 3, coarse=16, fine=64)
-    roots = m.stats["unfollowed_creases"]
-    assert len(roots) == count
-    for _, p in roots:
-        # Each point is on the surface and on the plane where the root's argument vanishes.
-        assert abs(float(m.surface(np.array([p]))[0])) < 1e-9
+    # crease that is not traced: the mesh had open edges all along it (432
+    # on the star superquadric, with a warning).  Refused in one line that
+    # names the problem and a point of the crease.
+    import re
+
+    with pytest.raises(singmesh.SurfaceError) as e:
+        singmesh.mesh(text, [[-1.2, 1.2]] * 3, coarse=16, fine=64)
+    msg = str(e.value)
+    assert "\n" not in msg and "cuspidal crease" in msg and "not differentiable" in msg
+    assert f"along {count} curve(s)" in msg
+    p = np.array([float(c) for c in re.search(r"through \(([^)]*)\)", msg).group(1).split(",")])
+    # The point is on the surface (to the 6 digits printed) and on a plane
+    # where the root's argument vanishes (one coordinate 0, or x = 0.1).
+    assert abs(float(singmesh.Surface.parse(text)(p[None])[0])) <= 1e-5
+    assert np.min(np.abs(np.concatenate([p, [p[0] - 0.1]]))) < 1e-5
 
 
 @pytest.mark.parametrize("text", ["abs(x)^2.5 + abs(y)^2.5 + abs(z)^3 - 1", "sqrt(x) + y - 0.5",
