@@ -228,11 +228,9 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         creases = crease_curves(surf, b, step=float(cell.max()))
     curves = merge_curve_sets(curves, creases)
     # A root of |u| along a curve of the surface (|x|^0.5 + ...) is a
-    # cuspidal crease that is not traced: the mesh would have open edges
-    # all along it, so the surface is refused, with where.
+    # cuspidal crease that is not traced: said below, and refused where
+    # the mesh comes out open along it.
     unfollowed = [(name, p.tolist()) for name, p in root_creases(surf, b)]
-    if unfollowed:
-        raise SurfaceError(cuspidal_crease_refusal(unfollowed))
     t_curves = time.perf_counter() - t_curves
     t_sing = time.perf_counter()
     # Points on the curves are their special points (pinch and triple
@@ -402,6 +400,12 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings() + m.curve_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
+    # Closed across its cuspidal creases (star superquadrics with p = 2/3
+    # or 0.8: chi 2, the crease cut by the lattice, not followed), the mesh
+    # is kept with the warning; open along them (p = 1/2: 432 open edges),
+    # the surface is refused rather than returned broken.
+    if unfollowed and _open_inside(m):
+        raise SurfaceError(cuspidal_crease_refusal(unfollowed))
     for note in m.crease_warnings():
         warnings.warn(note, CreaseWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
@@ -411,6 +415,16 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _open_inside(m: Mesh) -> bool:
+    """Whether an edge with one triangle lies inside the box (not in one of its faces)."""
+    if not len(m.faces):
+        return False
+    e = np.sort(m.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    one = edges[count == 1]
+    return bool((~(faces_of(m.vertices[one[:, 0]], m.box) & faces_of(m.vertices[one[:, 1]], m.box)).any(axis=1)).any())
 
 
 def _strips_failed(m: Mesh) -> bool:
