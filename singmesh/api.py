@@ -464,7 +464,17 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
     where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
     if np.isnan(f).all():
         return f"empty mesh: F = {surface} is undefined everywhere in the box {where} (e.g. sqrt or log of a negative number)"
+    x = (box[:, 0] + grid * (box[:, 1] - box[:, 0]))[~np.isnan(f)]
     f = f[~np.isnan(f)]
+    if ((f >= 0).all() or (f <= 0).all()) and (f == 0).any():
+        # F touches 0 without changing sign (-|z|, -(x^2 + y^2)): such
+        # zeros bound no solid and are not meshed; saying "both signs"
+        # would send the user looking for a zero that is not missing.
+        p = x[np.argmax(f == 0)]
+        side = ">=" if (f >= 0).all() else "<="
+        return (f"empty mesh: F = {surface} is {side} 0 in the box {where} and only touches 0 (e.g. at "
+                f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})) without changing sign: such zeros bound no solid "
+                "and are not meshed")
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
     return f"empty mesh: the surface F = {surface} does not meet the box {where} (F is {sign} there)"
 

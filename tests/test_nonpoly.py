@@ -224,6 +224,10 @@ def test_f_undefined_on_the_whole_box_is_refused(text):
     ("sqrt(x y - x^2 - y^2 - 1) + z", "undefined everywhere"),
     ("exp(x) + 1", "does not meet the box.*positive"),
     ("x^2 + y^2 + z^2 + 1", "does not meet the box.*positive"),
+    # F touches 0 on a plane without changing sign: said so, not "both
+    # signs but without a zero found" (the zero is no surface to find).
+    ("-Abs(z)", "<= 0 in the box .* only touches 0 .*without changing sign"),
+    ("Abs(x + 0.25) * (y^2 + 1)", ">= 0 in the box .* only touches 0 .*without changing sign"),
 ])
 def test_an_empty_mesh_is_said(text, words):
     with pytest.warns(singmesh.EmptyMeshWarning, match=words):
