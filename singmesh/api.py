@@ -29,6 +29,7 @@ from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.skeleton.tips import root_creases, tip_points
 
 from . import tolerances as tol
+from . import topology
 from .errors import SurfaceError
 from .memory import Budget, MemoryBudgetError, parse_size
 from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning, cuspidal_crease_refusal
@@ -421,8 +422,7 @@ def _open_inside(m: Mesh) -> bool:
     """Whether an edge with one triangle lies inside the box (not in one of its faces)."""
     if not len(m.faces):
         return False
-    e = np.sort(m.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges, count = np.unique(e, axis=0, return_counts=True)
+    edges, count = topology.edges_with_counts(m.faces)
     one = edges[count == 1]
     return bool((~(faces_of(m.vertices[one[:, 0]], m.box) & faces_of(m.vertices[one[:, 1]], m.box)).any(axis=1)).any())
 
