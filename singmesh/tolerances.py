@@ -661,6 +661,11 @@ CREASE_ONTO = 0.5
 #: radius of 12 steps); distinct creases a step apart are far above.
 CREASE_SAME = 0.05
 
+#: A corner of creases is pinned by the kinks through it when the
+#: smallest singular value of their stacked gradients is above this
+#: fraction of the largest (coincident box edges alone leave a line).
+CREASE_PIN_RANK = 1e-6
+
 #: A tube's rail lies on a patch of F = 0 without sign change (two solids
 #: of a Min touching along a face) where F has one sign this many fine
 #: cells to either side of it: the rails are a few cells from the crease,

@@ -290,6 +290,55 @@ def _corner(systems: list, which: list, start: np.ndarray, h: float):
     return x if good and np.linalg.norm(x - start) <= 2.0 * tol.CREASE_CORNER * h else None
 
 
+def _pinned(systems: list, x: np.ndarray, h: float) -> np.ndarray:
+    """Corners x (k, 3) moved onto the common zero of every kink equation that vanishes there.
+
+    Gauss-Newton on the kinks of the traces that meet at a corner is
+    singular where they run along one line (the coincident edges of two
+    boxes with coplanar faces): it lands anywhere on a short stretch of
+    that line, ~1e-7 off the true corner.  The other kinks through the
+    corner (the edges that make it a corner) pin it; a corner where they
+    do not (rank below 3), or that would move further than
+    ``CREASE_SAME`` steps or off any of its equations, stays as it is.
+    """
+    x = np.asarray(x, float)
+    with np.errstate(all="ignore"):
+        def stacked(y):
+            vg = [s.values(y) for s in systems]
+            return np.concatenate([v for v, _ in vg], 1), np.concatenate([g for _, g in vg], 1)
+
+        def on(v, g, y, within=None):
+            """Rows vanishing at y: within this distance, or else to CREASE_RESIDUAL (relative).
+
+            A tie of two pieces with one gradient there (a Min of boxes
+            whose faces are coplanar) has no distance: its value is
+            measured against the largest gradient at y instead."""
+            size = np.linalg.norm(g, axis=2)
+            if within is None:
+                within = tol.CREASE_RESIDUAL * np.maximum(np.abs(y).max(axis=1), 1.0)[:, None]
+                size = np.maximum(size, np.nan_to_num(size).max(axis=1, keepdims=True))
+            return np.isfinite(v) & np.isfinite(g).all(axis=2) & (size > 0) & (np.abs(v) <= within * size)
+
+        v, g = stacked(x)
+        # The kinks within CREASE_SAME steps of the corner: the ones through it, placed ~1e-7 off.
+        rows = on(v, g, x, tol.CREASE_SAME * h)
+        off = np.any(rows & ~on(v, g, x), axis=1)
+        y = x.copy()
+        for _ in range(tol.CREASE_NEWTON):
+            v, g = stacked(y)
+            v, g = np.where(rows, v, 0.0), np.where(rows[:, :, None], g, 0.0)
+            step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
+            step = np.where(np.isfinite(step), step, 0.0)
+            y = y - step
+            if np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(y), 1.0)):
+                break
+        v, g = stacked(y)
+        sv = np.linalg.svd(np.where(rows[:, :, None], g, 0.0), compute_uv=False)
+        good = (sv[:, 2] > tol.CREASE_PIN_RANK * sv[:, 0]) & np.all(on(v, g, y) | ~rows, axis=1)
+        good &= off & (np.linalg.norm(y - x, axis=1) <= tol.CREASE_SAME * h)
+    return np.where(good[:, None], y, x)
+
+
 def _densify(systems: list, lines: list, pieces: int) -> list:
     """Each step of each polyline divided into ``pieces`` by Newton from the chord, all at once per crease."""
     if pieces <= 1:
@@ -885,6 +934,9 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
             P[comp[0]] = x
             remap[comp] = comp[0]
             special[comp[0]] = "corner of creases"
+    corners = np.array(sorted(v for v, kind in special.items() if kind == "corner of creases"), np.int64)
+    if len(corners):
+        P[corners] = _pinned(systems, P[corners], h)
     for v, _, how in end_vertex:
         if how == "box":
             special[v] = "end on the box"

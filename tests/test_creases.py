@@ -598,3 +598,23 @@ def test_stacked_boxes_touching_along_a_face(seed):
     b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
     _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, np.array(corners, float).T).T, starts=1500,
                          on=(a, b))
+
+
+def test_corner_on_coincident_box_edges_is_exact():
+    # Where the box [-0.8, 0.8] x [-0.3, 0.3] x [-0.3, 0.3] of an L ends on
+    # the edge it shares with the other box (at (-0.8, 0.3, +-0.3)), the
+    # traces meet at a corner whose Gauss-Newton on the two coincident
+    # kinks is singular: it landed 7e-8 off the edge (on some machines, at
+    # some boxes), on the surface but off the crease.  The kinks through
+    # the corner (the end of the first box's edge) pin it.
+    eq = ("Min(Max(Abs(x)-0.8, Abs(y)-0.3, Abs(z)-0.3), "
+          "Max(Abs(x+0.5)-0.3, Abs(y-0.35)-0.65, Abs(z)-0.3))")
+    outline = np.array([[-0.8, -0.3], [0.8, -0.3], [0.8, 0.3], [-0.2, 0.3], [-0.2, 1.0], [-0.8, 1.0]])
+    segments = [(np.r_[p, c], np.r_[q, c]) for p, q in zip(outline, np.roll(outline, -1, 0)) for c in (-0.3, 0.3)]
+    segments += [(np.r_[p, -0.3], np.r_[p, 0.3]) for p in outline]
+    a = np.array([s[0] for s in segments])
+    b = np.array([s[1] for s in segments])
+    box = np.array([[-1.2, 1.2]] * 3) + 0.0707
+    m = singmesh.mesh(eq, box=box, coarse=8, fine=64)
+    cp = np.concatenate([c.points for c in m.singular_curves])
+    assert _segment_distance(cp, a, b).max() <= 1e-9 * 2.4
