@@ -344,6 +344,16 @@ CENTRE_NEWTON = 8
 #: Centring stops when a step moves the point less than this (relative).
 CENTRE_STOP = 4e-16
 
+#: A corank-2 non-simple point whose centring conditions have a Jacobian
+#: of smallest singular value below this fraction of the largest leaves a
+#: direction free (y in x^2 + y^6 + z^4), fixed then by g's order along it.
+CENTRE_FLAT = 1e-6
+
+#: ... the order k + 1 along it: the first derivative d^(k+1) g / de^(k+1)
+#: above this fraction of the jet's scale times (k + 1)! (a coefficient of
+#: t^(k+1) of 1e-3 the largest of g's).
+CENTRE_FLAT_SLOPE = 1e-3
+
 # ---------------------------------------------------------------- singular curves
 #: Gauss-Newton iterations that put a vertex on a curve of singular points
 #: (across a cuspidal edge convergence is linear: ~2/3 per step).

@@ -40,6 +40,8 @@ point settle.
 
 from __future__ import annotations
 
+from math import comb, factorial
+
 import numpy as np
 from numpy.polynomial import polynomial as P
 
@@ -92,6 +94,52 @@ def _derivative_at(c: np.ndarray, alpha: tuple[int, ...], sigma: np.ndarray) -> 
     return float(P.polyval2d(sigma[0], sigma[1], d))
 
 
+def _directional(c: np.ndarray, e: np.ndarray, k: int, sigma: np.ndarray) -> float:
+    """The k-th derivative of the two-variable polynomial c along the unit vector e, at sigma."""
+    return sum(comb(k, j) * e[0] ** j * e[1] ** (k - j) * _derivative_at(c, (j, k - j), sigma)
+               for j in range(k + 1))
+
+
+def _flat_direction(J: np.ndarray) -> np.ndarray | None:
+    """The unit direction (2,) that centring conditions with Jacobian J leave free, or None.
+
+    The 2- and 3-jet of g vanish at the centre of x^2 + y^6 + z^4 (a W
+    germ), but a shift s along y changes them only by ~s^3: they fix the
+    point to (eps / 120)**(1/3) ~ 1e-6 there, and their least-squares step
+    along y is noise.  The least right-singular vector of J, where its
+    smallest singular value is below ``CENTRE_FLAT`` of its largest.
+    """
+    _, sv, vt = np.linalg.svd(J)
+    if sv[0] == 0 or sv[-1] > tol.CENTRE_FLAT * sv[0]:
+        return None
+    return vt[-1]
+
+
+def _along_flat(gk: np.ndarray, sigma: np.ndarray, e: np.ndarray, N: int) -> np.ndarray:
+    """The centre along the free direction e: where g's restriction has its full order.
+
+    Along e, g has an order k + 1 > 4 at the centre (6 for x^2 + y^6 +
+    z^4), and d^k g / de^k = 0 there is a regular equation in the shift
+    (slope d^(k+1) g / de^(k+1)), as the centre of an A_k.
+    """
+    scale = float(np.abs(gk).max())
+    for k in range(4, N):
+        if abs(_directional(gk, e, k + 1, sigma)) > tol.CENTRE_FLAT_SLOPE * scale * factorial(k + 1):
+            break
+    else:
+        return sigma
+    s = 0.0
+    for _ in range(tol.CENTRE_NEWTON):
+        x = sigma + s * e
+        ds = _directional(gk, e, k, x) / _directional(gk, e, k + 1, x)
+        if not np.isfinite(ds):
+            return sigma
+        s -= ds
+        if abs(ds) <= 1e-3 * np.finfo(float).eps * max(abs(s), 1e-300):
+            break
+    return sigma + s * e
+
+
 def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Frame) -> np.ndarray | None:
     """The shift from ``p`` to the centre of its singular point, to first order.
 
@@ -116,12 +164,15 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
     K = np.eye(m) if frame.kernel is None else frame.kernel
     gk = compose(g, np.zeros(m), K, N) if m == 2 else g
     sigma = np.zeros(m)
-    for _ in range(tol.CENTRE_NEWTON):
+    flat = None
+    for i in range(tol.CENTRE_NEWTON):
         c = np.array([_derivative_at(gk, a, sigma) for a in alphas])
         J = np.array([[_derivative_at(gk, tuple(np.add(a, np.eye(m, dtype=int)[j])), sigma)
                        for j in range(m)] for a in alphas])
         if not (np.isfinite(c).all() and np.isfinite(J).all()):
             return None
+        if i == 0 and t.name == "non-simple" and m == 2:
+            flat = _flat_direction(J)
         if t.name == "non-simple":
             # Directions of very different orders (y^6 beside z^4): their
             # columns differ by more than lstsq's rcond and the slow one
@@ -130,9 +181,14 @@ def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Fr
             d = np.linalg.lstsq(J / cols, c, rcond=None)[0] / cols
         else:
             d, *_ = np.linalg.lstsq(J, c, rcond=None)
+        if flat is not None:
+            # Along it the conditions are ~ s^3: their step there is noise.
+            d = d - flat * (flat @ d)
         sigma = sigma - d
         if np.abs(d).max() <= 1e-3 * np.finfo(float).eps * max(np.abs(sigma).max(), 1e-300):
             break
+    if flat is not None:
+        sigma = _along_flat(gk, sigma, flat, N)
     uv = K @ sigma
     if m == 1:
         w = [P.polyval(uv[0], phi) for phi in phis]
