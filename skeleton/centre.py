@@ -48,7 +48,7 @@ from numpy.polynomial import polynomial as P
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
-from .classify import NOTE_CORANK3, NOTE_ZERO_CUBIC, Frame, SingularityType, analyse
+from .classify import NOTE_CORANK3, NOTE_CUBE, NOTE_ZERO_CUBIC, Frame, SingularityType, analyse
 from .splitting import compose, derivative, split
 
 #: Derivatives of g (in the frame's kernel coordinates) that vanish at the
@@ -66,6 +66,9 @@ _CONDITIONS = {
 _NON_SIMPLE = {
     NOTE_CORANK3: [a for a in np.ndindex(3, 3, 3) if sum(a) == 2],
     NOTE_ZERO_CUBIC: [a for a in np.ndindex(4, 4) if sum(a) in (2, 3)],
+    # X^3 + Y^6 (J10) in the frame of the cube: g_XX fixes X; Y, which it
+    # leaves free, is fixed by g's order along it (_along_flat).
+    NOTE_CUBE: [(2, 0)],
 }
 
 
@@ -94,12 +97,6 @@ def _derivative_at(c: np.ndarray, alpha: tuple[int, ...], sigma: np.ndarray) -> 
     return float(P.polyval2d(sigma[0], sigma[1], d))
 
 
-def _directional(c: np.ndarray, e: np.ndarray, k: int, sigma: np.ndarray) -> float:
-    """The k-th derivative of the two-variable polynomial c along the unit vector e, at sigma."""
-    return sum(comb(k, j) * e[0] ** j * e[1] ** (k - j) * _derivative_at(c, (j, k - j), sigma)
-               for j in range(k + 1))
-
-
 def _flat_direction(J: np.ndarray) -> np.ndarray | None:
     """The unit direction (2,) that centring conditions with Jacobian J leave free, or None.
 
@@ -110,34 +107,49 @@ def _flat_direction(J: np.ndarray) -> np.ndarray | None:
     smallest singular value is below ``CENTRE_FLAT`` of its largest.
     """
     _, sv, vt = np.linalg.svd(J)
+    if len(sv) < J.shape[1]:
+        return vt[-1]  # fewer conditions than directions (the J10 class: g_XX only)
     if sv[0] == 0 or sv[-1] > tol.CENTRE_FLAT * sv[0]:
         return None
     return vt[-1]
 
 
 def _along_flat(gk: np.ndarray, sigma: np.ndarray, e: np.ndarray, N: int) -> np.ndarray:
-    """The centre along the free direction e: where g's restriction has its full order.
+    """The centre along the free direction e, where g has its full order along it.
 
-    Along e, g has an order k + 1 > 4 at the centre (6 for x^2 + y^6 +
-    z^4), and d^k g / de^k = 0 there is a regular equation in the shift
-    (slope d^(k+1) g / de^(k+1)), as the centre of an A_k.
+    In coordinates (a, b) along (f, e), f normal to e, a shift t along e
+    turns the first term a^i b^(k+1) (i = 0, 1) of g into
+    (k + 1) t a^i b^k: its vanishing is a regular equation in t, as the
+    centre of an A_k.  The term is b^6 for x^2 + y^6 + z^4 (a W germ) and
+    X^3 + Y^6 (J10), a b^5 for X^3 + X Y^5 (E13); of two, the lower.
     """
-    scale = float(np.abs(gk).max())
-    for k in range(4, N):
-        if abs(_directional(gk, e, k + 1, sigma)) > tol.CENTRE_FLAT_SLOPE * scale * factorial(k + 1):
-            break
-    else:
+    basis = np.column_stack([[-e[1], e[0]], e])
+    h = compose(gk, sigma, basis, N)
+    small = tol.CENTRE_FLAT_SLOPE * float(np.abs(h).max())
+    best = None
+    for i in (0, 1):
+        for k in range(4 - i, N - i):
+            if abs(h[i, k + 1]) > small:
+                if best is None or k + i < best[0] + best[1]:
+                    best = (k, i)
+                break
+    if best is None:
         return sigma
-    s = 0.0
+    k, i = best
+    # d^i/da^i d^k/db^k of h at (0, t) is i! k! times the a^i b^k coefficient
+    # of h(a, t + b): a polynomial in t, solved by Newton from 0.
+    row = h[i, k:] * np.array([comb(k + j, k) for j in range(N + 1 - k)])
+    t = 0.0
     for _ in range(tol.CENTRE_NEWTON):
-        x = sigma + s * e
-        ds = _directional(gk, e, k, x) / _directional(gk, e, k + 1, x)
-        if not np.isfinite(ds):
+        v = P.polyval(t, row)
+        dv = P.polyval(t, P.polyder(row))
+        dt = v / dv
+        if not np.isfinite(dt):
             return sigma
-        s -= ds
-        if abs(ds) <= 1e-3 * np.finfo(float).eps * max(abs(s), 1e-300):
+        t -= dt
+        if abs(dt) <= 1e-3 * np.finfo(float).eps * max(abs(t), 1e-300):
             break
-    return sigma + s * e
+    return sigma + t * e
 
 
 def centring_step(surface: Surface, p: np.ndarray, t: SingularityType, frame: Frame) -> np.ndarray | None:

@@ -113,6 +113,7 @@ __all__ = ["SingularityType", "NotSingularError", "Frame", "analyse", "analyse_e
 #: and 3-jet, vanishes there.
 NOTE_CORANK3 = "corank 3 (type P8 or worse)"
 NOTE_ZERO_CUBIC = "corank 2 and the cubic term vanishes (type X9 or worse)"
+NOTE_CUBE = "corank 2, the cubic is a cube and the y^4, x y^3, y^5 terms vanish (type J10 or worse)"
 
 
 class NotSingularError(SurfaceError):
@@ -614,9 +615,7 @@ def _ek(g, cubic, sign_mu, tol, common, frame) -> SingularityType:
         return _make("E7", "E7++", 7, 2, None, common)
     if abs(c05) > tol:
         return _make("E8", "E8++", 8, 1, None, common)
-    return _make("non-simple", None, None, None, None, common,
-                 note="corank 2, the cubic is a cube and the y^4, x y^3, y^5 terms vanish "
-                      "(type J10 or worse)")
+    return _make("non-simple", None, None, None, None, common, note=NOTE_CUBE)
 
 
 def _format_jet(T: np.ndarray, tol: float, order: int = 3) -> str:
