@@ -240,6 +240,11 @@ CANDIDATE_DUST = 64 * 2.0 ** -52
 #: points are only fixed to about eps**(1/k) in double precision).
 SINGULAR_LOOSE = 1e-6
 
+#: Starts that Gauss-Newton took away from their box are tried again with
+#: Jacobian singular values below this fraction of the largest cut: the
+#: directions along which F is very flat (y^7) are left alone.
+SINGULAR_FLAT_RCOND = 1e-6
+
 #: A Gauss-Newton start whose step is below this times each of its
 #: coordinates (a few ulps) has converged: further steps only change the
 #: last bits, so it stops and the slow starts go on alone.

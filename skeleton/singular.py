@@ -96,12 +96,14 @@ def _corners(box, corner, level):
 
 
 def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
-                 max_step: float | None = None, across: np.ndarray | None = None) -> np.ndarray:
+                 max_step: float | None = None, across: np.ndarray | None = None,
+                 rcond: float = 1e-12) -> np.ndarray:
     """Least-squares Newton on (F, grad F) = 0 from many starts at once.
 
     With ``max_step``, steps longer than that are shortened to it; with
     ``across`` (a unit vector, or one per start), steps have no component
-    along it.  A start stops once its step is at rounding level (it would
+    along it; ``rcond``: singular values of the Jacobian below this
+    fraction of the largest are cut.  A start stops once its step is at rounding level (it would
     only jitter in the last bits): hundreds of nodes converge in a few
     steps, and only the slow ones (degenerate points) go on.
     """
@@ -128,10 +130,10 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
             a = across[live]
             j = j - np.einsum("kij,kj,kl->kil", j, a, a)
         if finite.all():
-            step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=1e-12), r)
+            step = np.einsum("kij,kj->ki", np.linalg.pinv(j, rcond=rcond), r)
         else:
             step = np.full(r.shape[:1] + (3,), np.nan)
-            step[finite] = np.einsum("kij,kj->ki", np.linalg.pinv(j[finite], rcond=1e-12), r[finite])
+            step[finite] = np.einsum("kij,kj->ki", np.linalg.pinv(j[finite], rcond=rcond), r[finite])
         if across is not None:
             a = across[live]
             step = step - np.einsum("ki,ki->k", step, a)[:, None] * a
@@ -199,12 +201,28 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     x = gauss_newton(surface, (lo + hi) / 2)
     size = box[:, 1] - box[:, 0]
     margin = 1e-9 * size
-    inside = np.all((x >= box[:, 0] - margin) & (x <= box[:, 1] + margin), axis=1)
-    # Accept loosely first: degenerate points are only fixed to ~eps^(1/k)
-    # in double precision, and centring decides.
-    near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
-    ok = inside & near_cell & np.isfinite(x).all(axis=1)
-    ok[ok] = residual(surface, x[ok]) < tol.SINGULAR_LOOSE
+
+    def accepted(x, lo, hi):
+        inside = np.all((x >= box[:, 0] - margin) & (x <= box[:, 1] + margin), axis=1)
+        # Accept loosely first: degenerate points are only fixed to ~eps^(1/k)
+        # in double precision, and centring decides.
+        near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
+        ok = inside & near_cell & np.isfinite(x).all(axis=1)
+        ok[ok] = residual(surface, x[ok]) < tol.SINGULAR_LOOSE
+        return ok
+
+    ok = accepted(x, lo, hi)
+    if not ok.all():
+        # Gauss-Newton wanders off a very flat point (x^3 + y^7 + z^2:
+        # grad F ~ y^6 along y, and the least-squares step gives that tiny
+        # column F's remainder): all 8 starts round it ended 0.2 away, and
+        # the point was lost.  Without the flat directions it stays, near
+        # enough for centring.
+        again = np.nonzero(~ok)[0]
+        y = gauss_newton(surface, (lo[again] + hi[again]) / 2, rcond=tol.SINGULAR_FLAT_RCOND)
+        good = accepted(y, lo[again], hi[again])
+        x[again[good]] = y[good]
+        ok[again[good]] = True
     x = x[ok]
     cell = float(np.max(hi[0] - lo[0]))
     # Starts along a curve the clump test missed (a clump of candidates
