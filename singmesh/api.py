@@ -466,6 +466,10 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
         return f"empty mesh: F = {surface} is undefined everywhere in the box {where} (e.g. sqrt or log of a negative number)"
     x = (box[:, 0] + grid * (box[:, 1] - box[:, 0]))[~np.isnan(f)]
     f = f[~np.isnan(f)]
+    if (f > 0).all() or (f < 0).all():
+        # The grid may miss where F touches 0 (-|z - 0.3|): climb towards 0
+        # from the samples nearest it.
+        x, f = _towards_zero(surface, box, x, f)
     if ((f >= 0).all() or (f <= 0).all()) and (f == 0).any():
         # F touches 0 without changing sign (-|z|, -(x^2 + y^2)): such
         # zeros bound no solid and are not meshed; saying "both signs"
@@ -477,6 +481,36 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
                 "and are not meshed")
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
     return f"empty mesh: the surface F = {surface} does not meet the box {where} (F is {sign} there)"
+
+
+def _towards_zero(surface: Surface, box: np.ndarray, x: np.ndarray, f: np.ndarray):
+    """The samples (x, f) of one sign, with points where a local search drove F to 0 added (f = 0).
+
+    Nelder-Mead on |F| from the few samples nearest 0 (F need not be
+    smooth where it touches 0: -|z - 0.3|), kept in the box; a value below
+    ``EMPTY_TOUCH`` of the largest |F| sampled counts as a zero.
+    """
+    from scipy.optimize import minimize
+
+    scale = float(np.abs(f).max())
+    lo, hi = box[:, 0], box[:, 1]
+
+    def size(p):
+        q = np.clip(p, lo, hi)
+        with np.errstate(all="ignore"):
+            v = float(surface(q[None])[0])
+        return abs(v) if np.isfinite(v) else np.inf
+
+    found = []
+    for i in np.argsort(np.abs(f), kind="stable")[:tol.EMPTY_TOUCH_STARTS]:
+        r = minimize(size, x[i], method="Nelder-Mead",
+                     options=dict(xatol=1e-15, fatol=0.0, maxiter=4000, maxfev=8000))
+        if r.fun <= tol.EMPTY_TOUCH * scale:
+            found.append(np.clip(r.x, lo, hi))
+            break
+    if not found:
+        return x, f
+    return np.vstack([x, found]), np.concatenate([f, np.zeros(len(found))])
 
 
 def _fine_for_creases(gap: float, fine_level: int) -> int:

@@ -836,3 +836,10 @@ IMPROVE_ON_BOX = 1e-12
 #: in reports and messages (1e300 is read exactly: 301 digits); the mesh
 #: uses the exact number.
 DISPLAY_DIGITS = 30
+
+#: An empty mesh of an F of one sign on a grid: a local search from this
+#: many samples looks for where F touches 0 (-|z - 0.3| between samples),
+#: and a value below this fraction of the largest |F| sampled is a zero
+#: (Nelder-Mead reaches rounding level at a kink or a double root).
+EMPTY_TOUCH_STARTS = 4
+EMPTY_TOUCH = 1e-12

@@ -11,6 +11,8 @@ the surface left out).
 
 import importlib.util
 
+import re
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -228,11 +230,24 @@ def test_f_undefined_on_the_whole_box_is_refused(text):
     # signs but without a zero found" (the zero is no surface to find).
     ("-Abs(z)", "<= 0 in the box .* only touches 0 .*without changing sign"),
     ("Abs(x + 0.25) * (y^2 + 1)", ">= 0 in the box .* only touches 0 .*without changing sign"),
+    # ... also where no sample of a 9^3 grid is on the zeros: on main
+    # "F is negative there".
+    ("-Abs(z - 0.3)", "<= 0 in the box .* only touches 0 .*without changing sign"),
+    ("Max(z - 0.3, 0.3 - z)", ">= 0 in the box .* only touches 0 .*without changing sign"),
+    ("-Abs(x + y + z - 0.123)", "<= 0 in the box .* only touches 0 .*without changing sign"),
 ])
 def test_an_empty_mesh_is_said(text, words):
-    with pytest.warns(singmesh.EmptyMeshWarning, match=words):
+    with pytest.warns(singmesh.EmptyMeshWarning, match=words) as w:
         m = singmesh.mesh(text, B1, coarse=8, fine=16)
     assert len(m.faces) == 0
+    said = re.search(r"e\.g\. at \(([-0-9.e]+), ([-0-9.e]+), ([-0-9.e]+)\)", str(w[0].message))
+    if "touches" in words:
+        # The point named is a zero of F (to its 6 printed digits).
+        import sympy
+
+        p = np.array([float(v) for v in said.groups()])
+        f = sympy.lambdify(sympy.symbols("x y z"), sympy.sympify(text.replace("^", "**")), "numpy")
+        assert abs(f(*p)) <= 1e-5 and np.all(np.abs(p) <= 1.0)
 
 
 # ------------------------------------------------------------ singular points of functions
