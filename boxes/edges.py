@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import lexsort
 from singmesh.surface import Surface
 
 from .octree import Octree
@@ -311,7 +312,7 @@ def _cluster(line_of, pos, snap, lines, tree):
     A cluster containing a zero lattice point, or within SNAP_LATTICE of
     one, becomes that lattice point.
     """
-    order = np.lexsort((pos, line_of))
+    order = lexsort((pos, line_of))
     line_of, pos, snap = line_of[order], pos[order], snap[order]
     if len(pos) == 0:
         return line_of, pos, snap
@@ -354,7 +355,7 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
     ev_pos = pos[idx]
     ev_snap = snap[idx]
     order_pos = ev_pos + np.where(ev_snap, side * 1e-3, 0.0)
-    order = np.lexsort((side, order_pos, ev_line))
+    order = lexsort((side, order_pos, ev_line))
     ev_line, ev_pos, ev_snap, side, direction, idx = (
         ev_line[order], ev_pos[order], ev_snap[order], side[order], direction[order], idx[order])
     # Exact integer membership: a float key mixing line and position would

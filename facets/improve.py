@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import stable_argsort
 from singmesh.facets.triangulate import edge_keys
 
 # Coordinates are kept as (3, n) arrays (one row per axis): gathers and
@@ -188,7 +189,7 @@ class _State:
         u = f.ravel()
         w = u[self.next]
         key = edge_keys(u, w, nv)
-        order = np.argsort(key, kind="stable")
+        order = stable_argsort(key)
         ks = key[order]
         start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
         length = np.diff(np.r_[start, m])
@@ -236,7 +237,7 @@ class _State:
         nb = np.bincount(src, minlength=nv)
         face = (faces_on == 1) & ~stay & (nb == 2)
         stay |= faces_on == 1
-        order = np.argsort(src, kind="stable")
+        order = stable_argsort(src)
         src, dst = src[order], dst[order]
         first = np.r_[True, src[1:] != src[:-1]] if len(src) else np.zeros(0, bool)
         self.ends = np.full((2, nv), -1, np.int64)
