@@ -20,6 +20,8 @@ import numpy as np
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
+from .swing import Swing
+
 
 @dataclass
 class SkeletonLink:
@@ -119,10 +121,15 @@ def _face_nodes(surface: Surface, v, a, b, axis, lo, hi):
     q[rows, axis] = a[rows, axis]
     ok = np.ones(k, bool)
     live = np.ones(k, bool)
+    swing = Swing(30)
     with np.errstate(all="ignore"):
         for _ in range(30):
             at = np.nonzero(live)[0]
             if len(at) == 0:
+                break
+            last = swing.cycle(at, q[at])
+            if last is not None:
+                q[at] = last  # the live points alternate between two values to the end
                 break
             f, g, h = surface.jet(q[at])
             r = np.arange(len(at))
@@ -152,9 +159,14 @@ def _correct_many(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: in
     """Gauss-Newton (minimum-norm steps) from each q onto F = 0, grad F . v = 0 (its own v)."""
     q = np.array(q, dtype=float)
     live = np.ones(len(q), bool)
+    swing = Swing(iterations)
     for _ in range(iterations):
         at = np.nonzero(live)[0]
         if len(at) == 0:
+            break
+        last = swing.cycle(at, q[at])
+        if last is not None:
+            q[at] = last  # the live points alternate between two values to the end
             break
         f, g, h = surface.jet(q[at])
         r = np.stack([f, np.einsum("ki,ki->k", g, v[at])], 1)
