@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
-from singmesh.sorting import first_occurrences, lexsort
+from singmesh.sorting import first_occurrences, lexsort, search_sorted
 from singmesh.surface import Surface
 
 from .edges import Events
@@ -82,7 +82,7 @@ def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
             other[:, n] += size if side else -size
             inside = (other[:, n] >= 0) & (other[:, n] < top)
             keys = node_keys(level, np.clip(other, 0, top - 1) >> (tree.fine_level - level)[:, None])
-            pos = np.minimum(np.searchsorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
+            pos = np.minimum(search_sorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
             split = inside & (len(tree.internal) > 0) & (tree.internal[pos] == keys) if len(tree.internal) else np.zeros(len(size), bool)
             keep = ~split
             rows.append(np.stack([

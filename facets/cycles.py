@@ -20,7 +20,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from singmesh.sorting import lexsort
+from singmesh.sorting import lexsort, unique_inverse
 
 
 @dataclass
@@ -87,7 +87,7 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     """Orbits of the successor map of every box's links."""
     node_src = box * n_events + src
     node_dst = box * n_events + dst
-    nodes, inv = np.unique(np.concatenate([node_src, node_dst]), return_inverse=True)
+    nodes, inv = unique_inverse(np.concatenate([node_src, node_dst]))
     a, b = inv[: len(src)], inv[len(src):]
     n = len(nodes)
     out_deg = np.bincount(a, minlength=n)

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
-from singmesh.sorting import stable_argsort
+from singmesh.sorting import search_sorted, stable_argsort
 from singmesh.facets.triangulate import edge_keys
 
 # Coordinates are kept as (3, n) arrays (one row per axis): gathers and
@@ -371,7 +371,7 @@ class _State:
     def _exists(self, new):
         """Whether the edges with keys ``new`` are in the mesh."""
         keys, extra = self.keys, self.extra
-        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, new), len(keys) - 1)
         out = (keys[k] == new) & self.alive[k]
         if len(extra):
             out |= extra[np.minimum(np.searchsorted(extra, new), len(extra) - 1)] == new
@@ -380,12 +380,12 @@ class _State:
     def _replace(self, gone, new):
         """Edges ``gone`` (in the mesh) leave it, edges ``new`` (not in it, distinct) come."""
         keys, extra = self.keys, self.extra
-        k = np.minimum(np.searchsorted(keys, gone), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, gone), len(keys) - 1)
         base = (keys[k] == gone) & self.alive[k]
         self.alive[k[base]] = False
         if len(extra):
             extra = np.delete(extra, np.searchsorted(extra, gone[~base]))
-        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, new), len(keys) - 1)
         back = keys[k] == new  # an edge of the input that a flip removed, made again
         self.alive[k[back]] = True
         self.extra = np.sort(np.concatenate([extra, new[~back]]))

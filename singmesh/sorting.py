@@ -105,3 +105,26 @@ def unique_inverse(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     inverse = np.empty(len(a), np.int64)
     inverse[order] = np.cumsum(new) - 1
     return s[new], inverse
+
+
+#: Fewer needles than this go to ``np.searchsorted`` as they are.
+_FEW_NEEDLES = 256
+
+
+def search_sorted(a: np.ndarray, v: np.ndarray, side: str = "left") -> np.ndarray:
+    """``np.searchsorted(a, v, side)`` for a 1-d ``v``, entry for entry, with the needles sorted first.
+
+    A binary search per needle in random order misses the cache at every
+    step; in increasing order the steps of one needle follow those of the
+    one before (numpy also starts each search from the last result): on
+    10^4-10^5 needles the sort costs a fraction of what it saves (Barth's
+    leaf look-ups: ~8x).  Each needle's position does not depend on the
+    others'.
+    """
+    v = np.asarray(v)
+    if v.ndim != 1 or len(v) < _FEW_NEEDLES or len(a) < _FEW_NEEDLES:
+        return np.searchsorted(a, v, side=side)
+    order = np.argsort(v)
+    out = np.empty(len(v), np.intp)
+    out[order] = np.searchsorted(a, v[order], side=side)
+    return out

@@ -51,3 +51,18 @@ def test_first_occurrences_and_unique_inverse_are_numpys():
         assert np.array_equal(u, u0) and np.array_equal(inv, inv0)
     assert len(sorting.first_occurrences(np.zeros(0, np.int64))) == 0
     assert len(sorting.lexsort((np.zeros(0),))) == 0
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_search_sorted_is_numpys(side):
+    """sorting.search_sorted (the needles sorted first) is np.searchsorted entry for entry:
+    lattice keys as the leaf look-ups give them (repeats, misses, ends), floats with NaN."""
+    rng = np.random.default_rng(5)
+    for n, k in [(10, 5), (300, 5000), (13752, 82512), (47262, 8073)]:
+        hay = np.sort(rng.integers(0, 1 << 40, n))
+        hay[: n // 10] = hay[0]  # repeats in the haystack
+        needles = np.concatenate([rng.integers(-5, 1 << 41, k // 2), rng.choice(hay, k - k // 2)])
+        assert np.array_equal(sorting.search_sorted(hay, needles, side), np.searchsorted(hay, needles, side=side))
+    x = np.sort(_floats(rng, 2000))
+    q = _floats(rng, 3000)
+    assert np.array_equal(sorting.search_sorted(x, q, side), np.searchsorted(x, q, side=side))
