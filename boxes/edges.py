@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import lexsort, search_sorted
 from singmesh.surface import Surface
 
 from .octree import Octree
@@ -100,8 +101,8 @@ class Events:
         k_hi = line * _LINE_STRIDE + end[on]
         many = n_ev > _FEW_EVENTS
         if many.any():
-            lo[many] = np.searchsorted(self.cell_key, k_lo[many], side="left")
-            hi[many] = np.searchsorted(self.cell_key, k_hi[many], side="left")
+            lo[many] = search_sorted(self.cell_key, k_lo[many], side="left")
+            hi[many] = search_sorted(self.cell_key, k_hi[many], side="left")
         # The j-th event of every line at once (whole arrays, masked where
         # a line has fewer: no gather and scatter of the segments still going).
         few = np.where(many, 0, n_ev)
@@ -135,7 +136,7 @@ class Events:
             table[(self.lines[:, 0] * m + self.lines[:, 1]) * m + self.lines[:, 2]] = np.arange(n_lines)
             return table[(axis * m + u) * m + v].astype(np.int64)
         q = line_keys(axis, u, v)
-        ids = np.minimum(np.searchsorted(self.line_keys, q), n_lines - 1)
+        ids = np.minimum(search_sorted(self.line_keys, q), n_lines - 1)
         return np.where(self.line_keys[ids] == q, ids, -1)
 
 
@@ -238,7 +239,7 @@ def _zero_lattice_points(surface, tree, corners, uniq):
     a = corners[zero, 0]
     u = xyz[np.arange(len(a)), (a + 1) % 3]
     v = xyz[np.arange(len(a)), (a + 2) % 3]
-    ids = np.searchsorted(uniq, line_keys(a, u, v))
+    ids = search_sorted(uniq, line_keys(a, u, v))
     return ids, xyz[np.arange(len(a)), a]
 
 
@@ -311,7 +312,7 @@ def _cluster(line_of, pos, snap, lines, tree):
     A cluster containing a zero lattice point, or within SNAP_LATTICE of
     one, becomes that lattice point.
     """
-    order = np.lexsort((pos, line_of))
+    order = lexsort((pos, line_of))
     line_of, pos, snap = line_of[order], pos[order], snap[order]
     if len(pos) == 0:
         return line_of, pos, snap
@@ -354,7 +355,7 @@ def _events_from_roots(surface, tree, lines, uniq, line_of, pos, snap) -> Events
     ev_pos = pos[idx]
     ev_snap = snap[idx]
     order_pos = ev_pos + np.where(ev_snap, side * 1e-3, 0.0)
-    order = np.lexsort((side, order_pos, ev_line))
+    order = lexsort((side, order_pos, ev_line))
     ev_line, ev_pos, ev_snap, side, direction, idx = (
         ev_line[order], ev_pos[order], ev_snap[order], side[order], direction[order], idx[order])
     # Exact integer membership: a float key mixing line and position would

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import first_occurrences, lexsort, search_sorted
 from singmesh.surface import Surface
 
 from .edges import Events
@@ -81,7 +82,7 @@ def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
             other[:, n] += size if side else -size
             inside = (other[:, n] >= 0) & (other[:, n] < top)
             keys = node_keys(level, np.clip(other, 0, top - 1) >> (tree.fine_level - level)[:, None])
-            pos = np.minimum(np.searchsorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
+            pos = np.minimum(search_sorted(tree.internal, keys), max(len(tree.internal) - 1, 0))
             split = inside & (len(tree.internal) > 0) & (tree.internal[pos] == keys) if len(tree.internal) else np.zeros(len(size), bool)
             keep = ~split
             rows.append(np.stack([
@@ -95,8 +96,7 @@ def contact_squares(tree: Octree, leaves: np.ndarray | None = None):
     # One int64 per square (2 + 3 x 16 + 5 bits): a 1-D unique, not rows.
     size_bits = np.log2(rows[:, 4]).astype(np.int64)
     packed = (rows[:, 0] << 53) | (rows[:, 1] << 37) | (rows[:, 2] << 21) | (rows[:, 3] << 5) | size_bits
-    _, first = np.unique(packed, return_index=True)
-    first = np.sort(first)
+    first = first_occurrences(packed)
     return rows[first], owners[first], sides[first]
 
 
@@ -174,7 +174,7 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     sq, m = inc["sq"], mode[inc["sq"]]
     key1 = np.select([m == 0, m == 1], [inc["u"], inc["v"]], inc["ccw"])
     key2 = np.select([m == 0, m == 1], [inc["tie_u"], inc["tie_v"]], inc["tie_ccw"])
-    order = np.lexsort((key2, key1, sq))
+    order = lexsort((key2, key1, sq))
     sq, ev, is_start = sq[order], inc["ev"][order], inc["is_start"][order]
     counts = np.bincount(sq, minlength=n_squares)
     offset = np.cumsum(counts) - counts
@@ -201,7 +201,7 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
     slot = (rank - shift[sq]) % np.maximum(counts[sq], 1)
     ok = ~bad[sq]
     sq, ev, is_start, slot = sq[ok], ev[ok], is_start[ok], slot[ok]
-    order = np.lexsort((slot, sq))
+    order = lexsort((slot, sq))
     a, b = order[0::2], order[1::2]
     pair_bad = is_start[a] == is_start[b]
     bad[sq[a][pair_bad]] = True

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import search_sorted
 from singmesh.surface import CHILD_OFFSETS, Surface
 
 
@@ -111,7 +112,7 @@ class Octree:
             # Only the points no leaf of another level holds yet.
             shift = self.fine_level - lvl + 1
             q = node_keys(np.full(len(todo), lvl), doubled[todo] >> shift)
-            pos = np.minimum(np.searchsorted(sorted_keys, q), len(sorted_keys) - 1)
+            pos = np.minimum(search_sorted(sorted_keys, q), len(sorted_keys) - 1)
             hit = sorted_keys[pos] == q
             found[todo[hit]] = order[pos[hit]]
             todo = todo[~hit]
@@ -144,7 +145,7 @@ def containing_leaves(tree: Octree, points: np.ndarray, rel: float = 1e-9) -> tu
     for lvl in np.unique(tree.level).tolist():
         cell = np.floor(probes / (1 << (tree.fine_level - lvl))).astype(np.int64)
         q = node_keys(np.full(len(cell), lvl), cell)
-        pos = np.minimum(np.searchsorted(sorted_keys, q), max(len(sorted_keys) - 1, 0))
+        pos = np.minimum(search_sorted(sorted_keys, q), max(len(sorted_keys) - 1, 0))
         hit = (found < 0) & (len(sorted_keys) > 0) & (sorted_keys[pos] == q)
         found[hit] = order[pos[hit]]
     pairs = np.unique(np.stack([owner[found >= 0], found[found >= 0]], axis=1), axis=0)
@@ -233,7 +234,7 @@ def _near_pairs(box, level, index, regions, side):
     if (sorted_keys[1:] == sorted_keys[:-1]).any():
         return None  # (a box given twice: each copy is its own row)
     q = (cells[:, 0] * m + cells[:, 1]) * m + cells[:, 2]
-    pos = np.minimum(np.searchsorted(sorted_keys, q), len(sorted_keys) - 1)
+    pos = np.minimum(search_sorted(sorted_keys, q), len(sorted_keys) - 1)
     hit = sorted_keys[pos] == q
     return order[pos[hit]], reg[hit]
 

@@ -20,6 +20,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from singmesh.sorting import lexsort, unique_inverse
+
 
 @dataclass
 class Cycles:
@@ -85,7 +87,7 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     """Orbits of the successor map of every box's links."""
     node_src = box * n_events + src
     node_dst = box * n_events + dst
-    nodes, inv = np.unique(np.concatenate([node_src, node_dst]), return_inverse=True)
+    nodes, inv = unique_inverse(np.concatenate([node_src, node_dst]))
     a, b = inv[: len(src)], inv[len(src):]
     n = len(nodes)
     out_deg = np.bincount(a, minlength=n)
@@ -120,7 +122,7 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
         step += 1
     cyc = label[used]
     idx = np.nonzero(used)[0]
-    order = np.lexsort((position[idx], cyc))
+    order = lexsort((position[idx], cyc))
     idx, cyc = idx[order], cyc[order]
     # The first of each run of the (sorted) labels: np.unique's
     # return_index, without its sort.

@@ -43,6 +43,51 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         squares, hence the square in the key.
     next_key : int
     """
+    (polygons,), (splits,), next_key = sector_polygons_many(
+        [(p_key, p, cycle_keys, cycle_points, links, cycle_squares)], next_key)
+    return polygons, splits, next_key
+
+
+def sector_polygons_many(jobs: list, next_key: int):
+    """:func:`sector_polygons` of many cycles, the keys of each after the previous one's.
+
+    Parameters
+    ----------
+    jobs : list of (p_key, p, cycle_keys, cycle_points, links, cycle_squares)
+    next_key : first unused vertex key
+
+    Returns
+    -------
+    polygons : list, one (keys, points, sizes) per job
+    splits : list, one dict per job
+    next_key : int
+
+    Notes
+    -----
+    The spokes of each cycle are laid out one by one (few Python steps);
+    the distances the zippers compare and the flat-triangle test are
+    computed for all cycles at once (each row with the bits of a cycle
+    alone).  A cycle with flat triangles is built again with those spokes
+    straight, in the next round, as one alone would be.
+    """
+    states, splits = [], []
+    for job in jobs:
+        state, split, next_key = _prepare(*job, next_key)
+        states.append(state)
+        splits.append(split)
+    polygons = _sectors_many(states)
+    return polygons, splits, next_key
+
+
+def _prepare(p_key, p, cycle_keys, cycle_points, links, cycle_squares, next_key):
+    """The cycle with its face nodes and the spokes of one cycle (see :func:`sector_polygons`).
+
+    Returns
+    -------
+    state : tuple (spokes, p_key, p, keys, pts), or None for a collapsed cycle (no polygon)
+    splits : dict
+    next_key : int
+    """
     m = len(cycle_keys)
     splits: dict = {}
     # A cycle small next to its distance from p (a sharp cusp): traced
@@ -88,44 +133,111 @@ def sector_polygons(p_key: int, p: np.ndarray, cycle_keys: np.ndarray, cycle_poi
         spokes = sorted(spokes + [(first, [], [])] * (not spokes) + [(extra, [], [])])
     if n < 3 or len({a for a, _, _ in spokes}) < 2:
         # A collapsed cycle: no area to fan.
-        return (np.zeros(0, np.int64), np.zeros((0, 3)), []), splits, next_key
+        return None, splits, next_key
     spokes = _narrow_sectors(spokes, p, keys, pts)
-    # Traced points are for shape only: a spoke whose points make a flat
-    # triangle with a neighbour's (two traces on one line of the skeleton)
-    # goes straight, and the sectors are built again.
-    for _ in range(len(spokes) + 1):
-        polygons, flat = _sectors(spokes, p_key, p, keys, pts)
-        if not flat:
-            break
-        spokes = [(sp[0], [], []) if k in flat else sp for k, sp in enumerate(spokes)]
-    return polygons, splits, next_key
+    return (spokes, p_key, p, keys, pts), splits, next_key
 
 
-def _sectors(spokes, p_key, p, keys, pts):
-    """Zipped sectors between consecutive spokes and the spokes in flat triangles."""
-    n = len(keys)
-    flat = set()
-    # One table of the vertices: p, the cycle with its nodes, then each
-    # spoke's traced points; the triangles are rows of indices into it.
-    tab_k, tab_p, trace_at = [p_key] + list(keys), [p] + list(pts), []
-    for _, tkeys, tpts in spokes:
-        trace_at.append(list(range(len(tab_k), len(tab_k) + len(tkeys))))
-        tab_k += tkeys
-        tab_p += tpts
-    tab_k, tab_p = np.array(tab_k, np.int64), np.array(tab_p)
-    zips, tris = [], []
-    for k, (at, _, _) in enumerate(spokes):
-        nxt = (k + 1) % len(spokes)
-        # Spoke A runs out from p to the cycle, spoke B back in from it.
-        zipped = _zip_spokes([0] + trace_at[k][::-1] + [1 + at], [0] + trace_at[nxt][::-1] + [1 + spokes[nxt][0]],
-                             tab_p)
+def _sectors_many(states: list) -> list:
+    """The polygons of each prepared cycle (None: collapsed, no polygon).
+
+    Traced points are for shape only: a spoke whose points make a flat
+    triangle with a neighbour's (two traces on one line of the skeleton)
+    goes straight, and the cycle's sectors are built again (at most once
+    per spoke, then the last build stays).
+    """
+    out = [(np.zeros(0, np.int64), np.zeros((0, 3)), []) for _ in states]
+    todo = [c for c, st in enumerate(states) if st is not None]
+    spokes = {c: states[c][0] for c in todo}
+    rounds = {c: len(states[c][0]) + 1 for c in todo}
+    while todo:
+        built = _sectors_batch([(spokes[c],) + tuple(states[c][1:]) for c in todo])
+        again = []
+        for c, (polygons, flat) in zip(todo, built):
+            out[c] = polygons
+            rounds[c] -= 1
+            if flat and rounds[c] > 0:
+                spokes[c] = [(sp[0], [], []) if k in flat else sp for k, sp in enumerate(spokes[c])]
+                again.append(c)
+        todo = again
+    return out
+
+
+def _sectors_batch(cycles: list) -> list:
+    """:func:`_sectors` of many cycles (spokes, p_key, p, keys, pts): a list of (polygons, flat)."""
+    # One table of the vertices of all cycles: per cycle p, the cycle with
+    # its nodes, then each spoke's traced points; triangles are rows of
+    # indices into it.
+    tab_k, tab_p, base, trace_of = [], [], [], []
+    for spokes, p_key, p, keys, pts in cycles:
+        base.append(len(tab_k))
+        tab_k += [p_key] + list(keys)
+        tab_p += [p] + list(pts)
+        trace_at = []
+        for _, tkeys, tpts in spokes:
+            trace_at.append(list(range(len(tab_k), len(tab_k) + len(tkeys))))
+            tab_k += tkeys
+            tab_p += tpts
+        trace_of.append(trace_at)
+    tab_k, tab_p = np.array(tab_k, np.int64), np.array(tab_p).reshape(-1, 3)
+    # Each sector's two spokes (p, traced points, end on the cycle) and the
+    # lengths its zipper compares: every (spoke A point, spoke B point)
+    # pair but p, as A point - B point.
+    sectors, first, second = [], [], []
+    for (spokes, _, _, keys, _), b, trace_at in zip(cycles, base, trace_of):
+        for k, (at, _, _) in enumerate(spokes):
+            nxt = (k + 1) % len(spokes)
+            sa = [b] + trace_at[k][::-1] + [b + 1 + at]
+            sb = [b] + trace_at[nxt][::-1] + [b + 1 + spokes[nxt][0]]
+            sectors.append((sa, sb, len(first)))
+            for i in sa[1:]:
+                first += [i] * (len(sb) - 1)
+                second += sb[1:]
+    lengths = _lengths(tab_p[first] - tab_p[second]).tolist() if first else []
+    tris, zips = [], []
+    for sa, sb, at in sectors:
+        zipped = _zip_spokes(sa, sb, lengths, at)
         zips.append((len(tris), len(zipped)))
         tris += zipped
-    tris = np.array(tris, np.int64)  # (T, 3)
-    tri_pts = tab_p[tris]            # (T, 3, 3)
-    # Flat triangles, all at once: twice the area against the longest
-    # edge squared (the same products as np.cross and np.linalg.norm of
-    # one vector: matmul of a row by a column is the BLAS dot product).
+    tris = np.array(tris, np.int64).reshape(-1, 3)
+    is_flat = _flat_triangles(tab_p[tris])
+    results, s = [], 0
+    for (spokes, _, _, keys, _), b in zip(cycles, base):
+        n = len(keys)
+        flat = set()
+        out, sizes = [], []
+        for k, (at, tkeys, _) in enumerate(spokes):
+            nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
+            start, count = zips[s + k]
+            if is_flat[start:start + count].any():
+                flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
+            steps = (nxt_at - at) % n or n
+            # The outer part: the cycle from A's end to B's end.  It joins the
+            # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
+            # fanned from x, an inner vertex, when large.  Closed by the chord
+            # alone, an arc along a flat sheet cut by one face of the star would
+            # have no area.
+            if steps >= 2:
+                count -= 1
+                last = tris[start + count].tolist()
+                ends = (keys[at], keys[nxt_at])
+                x = next(v for v in last if tab_k[v] not in ends)
+                out.append(np.array([x] + [b + 1 + (at + j) % n for j in range(steps + 1)], np.int64))
+                sizes.append(steps + 2)
+            out.append(tris[start:start + count].reshape(-1))
+            sizes += [3] * count
+        s += len(spokes)
+        out = np.concatenate(out)
+        results.append(((tab_k[out], tab_p[out], sizes), flat))
+    return results
+
+
+def _flat_triangles(tri_pts: np.ndarray) -> np.ndarray:
+    """Whether each triangle (T, 3, 3) is flat: twice its area at most 1e-6 of its longest edge squared.
+
+    Row by row the same products as np.cross and np.linalg.norm of one
+    vector (matmul of a row by a column is the BLAS dot product).
+    """
     e = np.stack([tri_pts[:, 1] - tri_pts[:, 0], tri_pts[:, 2] - tri_pts[:, 1], tri_pts[:, 0] - tri_pts[:, 2]], 1)
     # np.cross(e[:, 0], -e[:, 2]) written out (its products and
     # differences, without its overhead of some 40 us a call).
@@ -134,30 +246,12 @@ def _sectors(spokes, p_key, p, keys, pts):
     c = np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
     area2 = np.sqrt(np.matmul(c[:, None, :], c[:, :, None])[:, 0, 0])
     longest = np.matmul(e[:, :, None, :], e[:, :, :, None])[:, :, 0, 0].max(axis=1)
-    is_flat = area2 <= 1e-6 * longest
-    out, sizes = [], []
-    for k, (at, tkeys, _) in enumerate(spokes):
-        nxt_at, nkeys, _ = spokes[(k + 1) % len(spokes)]
-        first, count = zips[k]
-        if is_flat[first:first + count].any():
-            flat |= {k for k, t in ((k, tkeys), ((k + 1) % len(spokes), nkeys)) if t}
-        steps = (nxt_at - at) % n or n
-        # The outer part: the cycle from A's end to B's end.  It joins the
-        # zipper's last triangle (x, A's end, B's end): the polygon x, arc is
-        # fanned from x, an inner vertex, when large.  Closed by the chord
-        # alone, an arc along a flat sheet cut by one face of the star would
-        # have no area.
-        if steps >= 2:
-            count -= 1
-            last = tris[first + count].tolist()
-            ends = (keys[at], keys[nxt_at])
-            x = next(v for v in last if tab_k[v] not in ends)
-            out.append(np.array([x] + [1 + (at + j) % n for j in range(steps + 1)], np.int64))
-            sizes.append(steps + 2)
-        out.append(tris[first:first + count].reshape(-1))
-        sizes += [3] * count
-    out = np.concatenate(out)
-    return (tab_k[out], tab_p[out], sizes), flat
+    return area2 <= 1e-6 * longest
+
+
+def _lengths(v: np.ndarray) -> np.ndarray:
+    """:func:`_length` of each row of ``v`` (K, 3): the square root of the same BLAS dot product."""
+    return np.sqrt(np.matmul(v[:, None, :], v[:, :, None])[:, 0, 0])
 
 
 def _length(v: np.ndarray) -> float:
@@ -200,24 +294,29 @@ def _narrow_sectors(spokes: list, p: np.ndarray, keys: list, pts: list, max_angl
     return spokes
 
 
-def _zip_spokes(a: list, b: list, points: np.ndarray) -> list:
+def _zip_spokes(a: list, b: list, lengths: list, at: int) -> list:
     """Triangles between two spokes sharing their first vertex p.
 
-    ``a`` and ``b`` are the spokes' vertices (indices into ``points``)
-    from p outwards.  Rings from p outwards, each step advancing on the
-    spoke whose next point gives the shorter diagonal: no triangle lies
-    along one spoke, so neighbouring sectors never pick the same sliver.
+    ``a`` and ``b`` are the spokes' vertices (indices into the vertex
+    table) from p outwards; ``lengths[at + (i - 1) (len(b) - 1) + j - 1]``
+    is the distance from a's i-th point to b's j-th (i, j >= 1).  Rings
+    from p outwards, each step advancing on the spoke whose next point
+    gives the shorter diagonal: no triangle lies along one spoke, so
+    neighbouring sectors never pick the same sliver.
 
     Returns
     -------
     list of [i, j, k] vertex indices
     """
+    nb = len(b) - 1
+
+    def dist(i, j):
+        return lengths[at + (i - 1) * nb + j - 1]
+
     tris = [[a[0], a[1], b[1]]]
     i = j = 1
     while i < len(a) - 1 or j < len(b) - 1:
-        adv_a = j == len(b) - 1 or (
-            i < len(a) - 1
-            and _length(points[a[i + 1]] - points[b[j]]) <= _length(points[a[i]] - points[b[j + 1]]))
+        adv_a = j == len(b) - 1 or (i < len(a) - 1 and dist(i + 1, j) <= dist(i, j + 1))
         if adv_a:
             tris.append([a[i], a[i + 1], b[j]])
             i += 1

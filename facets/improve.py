@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import search_sorted, stable_argsort
 from singmesh.facets.triangulate import edge_keys
 
 # Coordinates are kept as (3, n) arrays (one row per axis): gathers and
@@ -188,7 +189,7 @@ class _State:
         u = f.ravel()
         w = u[self.next]
         key = edge_keys(u, w, nv)
-        order = np.argsort(key, kind="stable")
+        order = stable_argsort(key)
         ks = key[order]
         start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
         length = np.diff(np.r_[start, m])
@@ -236,7 +237,7 @@ class _State:
         nb = np.bincount(src, minlength=nv)
         face = (faces_on == 1) & ~stay & (nb == 2)
         stay |= faces_on == 1
-        order = np.argsort(src, kind="stable")
+        order = stable_argsort(src)
         src, dst = src[order], dst[order]
         first = np.r_[True, src[1:] != src[:-1]] if len(src) else np.zeros(0, bool)
         self.ends = np.full((2, nv), -1, np.int64)
@@ -370,7 +371,7 @@ class _State:
     def _exists(self, new):
         """Whether the edges with keys ``new`` are in the mesh."""
         keys, extra = self.keys, self.extra
-        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, new), len(keys) - 1)
         out = (keys[k] == new) & self.alive[k]
         if len(extra):
             out |= extra[np.minimum(np.searchsorted(extra, new), len(extra) - 1)] == new
@@ -379,12 +380,12 @@ class _State:
     def _replace(self, gone, new):
         """Edges ``gone`` (in the mesh) leave it, edges ``new`` (not in it, distinct) come."""
         keys, extra = self.keys, self.extra
-        k = np.minimum(np.searchsorted(keys, gone), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, gone), len(keys) - 1)
         base = (keys[k] == gone) & self.alive[k]
         self.alive[k[base]] = False
         if len(extra):
             extra = np.delete(extra, np.searchsorted(extra, gone[~base]))
-        k = np.minimum(np.searchsorted(keys, new), len(keys) - 1)
+        k = np.minimum(search_sorted(keys, new), len(keys) - 1)
         back = keys[k] == new  # an edge of the input that a flip removed, made again
         self.alive[k[back]] = True
         self.extra = np.sort(np.concatenate([extra, new[~back]]))

@@ -15,7 +15,7 @@ import numpy as np
 from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 
-from .fans import insert_link_nodes, sector_polygons
+from .fans import insert_link_nodes, sector_polygons_many
 from .stars import stray_cycles
 from .tubes import tube_triangles
 
@@ -110,19 +110,20 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
         jobs.append((p, events.point[ev[a:b]], squares, directions[i]))
     all_spokes = skeleton_links_many(surf, jobs)
     star_keys, star_pts, star_sizes = [], [], []
+    fans = []
     for c, spokes in zip(star_cycles, all_spokes):
         i = stars[cycles.box[c]]
-        p = points[i].point
         span = slice(cycles.offsets[c], cycles.offsets[c + 1])
         cyc = ev[span]
-        cyc_keys, cyc_pts = events.key[cyc], events.point[cyc]
-        polys, split, next_key = sector_polygons(point_key(i), p, cyc_keys, cyc_pts, spokes, next_key,
-                                                 cycle_squares=cycles.squares[span])
+        fans.append((point_key(i), points[i].point, events.key[cyc], events.point[cyc], spokes, cycles.squares[span]))
+        branches[i] = branches.get(i, 0) + 1
+    # The sectors of all star cycles at once (the keys of each after the previous one's).
+    all_polys, all_splits, next_key = sector_polygons_many(fans, next_key)
+    for polys, split in zip(all_polys, all_splits):
         splits.update(split)
         star_keys.append(polys[0])
         star_pts.append(polys[1])
         star_sizes += polys[2]
-        branches[i] = branches.get(i, 0) + 1
     if star_sizes:
         # Large ones fan from their first vertex, p or a traced point.
         parts_keys.append(np.concatenate(star_keys))

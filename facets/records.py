@@ -11,13 +11,15 @@ from dataclasses import replace
 
 import numpy as np
 
+from singmesh.sorting import search_sorted
+
 
 def vertex_of(vkeys: np.ndarray, keys: np.ndarray) -> np.ndarray:
     """Mesh vertex of each key, -1 for keys no vertex has (``vkeys``: the key of each vertex)."""
     if len(vkeys) == 0:
         return np.full(len(keys), -1, np.int64)
     order = np.argsort(vkeys)
-    pos = np.minimum(np.searchsorted(vkeys[order], keys), max(len(vkeys) - 1, 0))
+    pos = np.minimum(search_sorted(vkeys[order], keys), max(len(vkeys) - 1, 0))
     hit = (len(vkeys) > 0) & (vkeys[order][pos] == keys)
     return np.where(hit, order[pos], -1)
 

@@ -16,10 +16,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
 from singmesh.surface import Surface
+
+from .swing import Swing
 
 
 @dataclass
@@ -120,10 +121,15 @@ def _face_nodes(surface: Surface, v, a, b, axis, lo, hi):
     q[rows, axis] = a[rows, axis]
     ok = np.ones(k, bool)
     live = np.ones(k, bool)
+    swing = Swing(30)
     with np.errstate(all="ignore"):
         for _ in range(30):
             at = np.nonzero(live)[0]
             if len(at) == 0:
+                break
+            last = swing.cycle(at, q[at])
+            if last is not None:
+                q[at] = last  # the live points alternate between two values to the end
                 break
             f, g, h = surface.jet(q[at])
             r = np.arange(len(at))
@@ -153,9 +159,14 @@ def _correct_many(surface: Surface, v: np.ndarray, q: np.ndarray, iterations: in
     """Gauss-Newton (minimum-norm steps) from each q onto F = 0, grad F . v = 0 (its own v)."""
     q = np.array(q, dtype=float)
     live = np.ones(len(q), bool)
+    swing = Swing(iterations)
     for _ in range(iterations):
         at = np.nonzero(live)[0]
         if len(at) == 0:
+            break
+        last = swing.cycle(at, q[at])
+        if last is not None:
+            q[at] = last  # the live points alternate between two values to the end
             break
         f, g, h = surface.jet(q[at])
         r = np.stack([f, np.einsum("ki,ki->k", g, v[at])], 1)
@@ -250,6 +261,50 @@ def _near_nodes(node: np.ndarray, ok: np.ndarray, cyc: np.ndarray, near: np.ndar
     return near_before, lambda k, q: same[(k, q)]
 
 
+class StarPoints:
+    """The cycle vertices of every star of a batch of jobs, to measure nodes against.
+
+    The jobs of one singular point (the same p, to the bit) share a star:
+    their cycles' vertices together, in the order of the jobs.
+    """
+
+    def __init__(self, jobs: list):
+        star_of: dict = {}
+        job_star, members = [], []
+        for jb in jobs:
+            key = np.asarray(jb[0], float).tobytes()
+            if key not in star_of:
+                star_of[key] = len(members)
+                members.append([])
+            job_star.append(star_of[key])
+            members[star_of[key]].append(np.asarray(jb[1], float).reshape(-1, 3))
+        #: The star of each job; its points ``points[start[s]:start[s] + count[s]]``.
+        self.job_star = np.array(job_star, np.int64)
+        self.count = np.array([sum(len(q) for q in m) for m in members], np.int64)
+        self.start = np.cumsum(self.count) - self.count
+        self.points = np.concatenate([q for m in members for q in m]).reshape(-1, 3) if members else np.zeros((0, 3))
+
+    def distance(self, job: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Chebyshev (max-norm) distance from each point ``q[k]`` (K, 3) to the nearest
+        vertex of the star of job ``job[k]`` (inf where that star has none).
+
+        The distances of all (point, star vertex) pairs at once: the same
+        differences and maxima as a k-d tree's query with ``p=inf``.
+        """
+        star = self.job_star[np.asarray(job, np.int64)]
+        count = self.count[star]
+        out = np.full(len(star), np.inf)
+        some = count > 0
+        if not some.any():
+            return out
+        rows = np.repeat(np.flatnonzero(some), count[some])
+        first = np.cumsum(count[some]) - count[some]
+        within = np.arange(len(rows)) - np.repeat(first, count[some])
+        d = np.abs(self.points[np.repeat(self.start[star[some]], count[some]) + within] - q[rows]).max(axis=1)
+        out[some] = np.minimum.reduceat(d, first)
+        return out
+
+
 def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
                         max_directions: int = 2) -> list[list[SkeletonLink]]:
     """:func:`skeleton_links` for many cycles at once.
@@ -271,6 +326,7 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
     along a cycle (skip one next to a node kept before it) is a loop.
     """
     n = len(jobs)
+    star_points = None  # the cycle vertices of each star, read when a node is not on its link's ends
     links: list[list[SkeletonLink]] = [[] for _ in range(n)]
     used = [0] * n
     nxt = [0] * n
@@ -314,14 +370,10 @@ def skeleton_links_many(surface: Surface, jobs: list, want: int = 4,
             # would be a second vertex at that event's place: no spoke there.
             loose = np.nonzero(ok & (vertex < 0))[0]
             if len(loose):
-                stars: dict = {}
-                for jb in jobs:
-                    stars.setdefault(np.asarray(jb[0], float).tobytes(), []).append(np.asarray(jb[1], float))
-                stars = {key: cKDTree(np.concatenate(v).reshape(-1, 3)) for key, v in stars.items()}
-                for k in loose.tolist():
-                    star = stars[np.asarray(jobs[active[int(cyc[k])]][0], float).tobytes()]
-                    d, _ = star.query(node[k], p=np.inf)
-                    ok[k] = not d <= tol.NODE_ON_OTHER * near[k] / tol.NODE_ON_VERTEX
+                if star_points is None:
+                    star_points = StarPoints(jobs)
+                d = star_points.distance(np.asarray(active, np.int64)[cyc[loose]], node[loose])
+                ok[loose] = ~(d <= tol.NODE_ON_OTHER * near[loose] / tol.NODE_ON_VERTEX)
             centre = np.array([jobs[active[j]][0] for j in cyc.tolist()], float).reshape(-1, 3)
             trace, traced = np.zeros((len(cyc), 2, 3)), np.zeros(len(cyc), bool)
             if ok.any():

@@ -29,6 +29,7 @@ from singmesh.surface import CHILD_OFFSETS, Surface
 from .centre import centre, residual, residual_each
 from .classify import NotSingularError, analyse_each
 from .points import SingularPoint
+from .swing import Swing
 
 
 #: Per surface (while it lives): the last candidate boxes of each box and
@@ -111,8 +112,13 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
     if across is not None:
         across = np.broadcast_to(np.asarray(across, dtype=float), x.shape)
     live = np.arange(len(x))
+    swing = Swing(iterations)
     for _ in range(iterations):
         if len(live) == 0:
+            break
+        last = swing.cycle(live, x[live])
+        if last is not None:
+            x[live] = last  # the live starts alternate between two values to the end
             break
         y = x[live]
         f, g, h = surface.jet(y)

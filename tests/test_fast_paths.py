@@ -718,3 +718,67 @@ def test_root_polishing_stops_swinging_roots_where_the_last_step_would_leave_the
         assert got.tobytes() == root.tobytes()
         swung += int(((seen[-1] == seen[-3]) & (seen[-1] != seen[-2])).sum())
     assert swung > 10
+
+
+def test_star_points_distance_is_the_k_d_trees():
+    """skeleton.curves.StarPoints.distance (a node against every vertex of its star's
+    cycles, all pairs at once) is cKDTree's query with p = inf, to the bit: jobs of one
+    point share a star, points on the vertices (distance 0) and 1e-31 off them (fuzz
+    s1-324's node on another cycle's event) included, a star without vertices is inf."""
+    from scipy.spatial import cKDTree
+
+    from singmesh.skeleton.curves import StarPoints
+
+    rng = np.random.default_rng(11)
+    centres = rng.normal(size=(5, 3)) * 0.123456789012345
+    jobs = []
+    for j in range(17):
+        p = centres[j % 5].copy()  # equal bits: the same star
+        jobs.append((p, p + rng.normal(size=(int(rng.integers(2, 30)), 3)) * 0.01, [], np.zeros((0, 3))))
+    jobs.append((np.array([7.0, 7.0, 7.0]), np.zeros((0, 3)), [], np.zeros((0, 3))))
+    stars = StarPoints(jobs)
+    job = rng.integers(0, len(jobs), 400)
+    q = np.array([jobs[j][0] for j in job]) + rng.normal(size=(400, 3)) * 0.02
+    on = np.flatnonzero(np.array([len(jobs[j][1]) for j in job]) > 0)[:60]
+    q[on[:30]] = [jobs[job[k]][1][k % len(jobs[job[k]][1])] for k in on[:30]]
+    q[on[30:]] = [jobs[job[k]][1][0] + 1e-31 for k in on[30:]]
+    got = stars.distance(job, q)
+    for k in range(len(job)):
+        key = jobs[job[k]][0].tobytes()
+        pts = np.concatenate([jb[1] for jb in jobs if jb[0].tobytes() == key]).reshape(-1, 3)
+        want = cKDTree(pts).query(q[k], p=np.inf)[0] if len(pts) else np.inf
+        assert got[k] == want
+    assert (got[on[:30]] == 0).all()
+
+
+def test_sector_polygons_of_many_cycles_are_each_alone(monkeypatch):
+    """facets.fans.sector_polygons_many (the zippers' distances and the flat-triangle
+    test of all star cycles at once) gives each cycle's polygons, splits and keys as
+    sector_polygons of that cycle alone gives them, to the bit: Barth's 100 star cycles
+    and a float-rotated D4's."""
+    import singmesh
+    from singmesh.facets import fans, polygons
+
+    jobs = []
+    original = fans.sector_polygons_many
+
+    def record(many, next_key):
+        jobs.append((list(many), next_key))
+        return original(many, next_key)
+
+    monkeypatch.setattr(polygons, "sector_polygons_many", record)
+    barth = ("4*(((1+sqrt(5))/2)**2*x**2-y**2)*(((1+sqrt(5))/2)**2*y**2-z**2)*(((1+sqrt(5))/2)**2*z**2-x**2)"
+             "-(1+2*((1+sqrt(5))/2))*(x**2+y**2+z**2-1)**2")
+    singmesh.mesh(barth, box=((-2.0, 2.0),) * 3)
+    singmesh.mesh(float_rotated("x^2 y - y^3 + z^2", 3)[0], box=BOX)
+    assert [len(m) for m, _ in jobs] == [100, len(jobs[1][0])] and len(jobs[1][0]) >= 1
+    for many, next_key in jobs:
+        got, got_splits, got_next = fans.sector_polygons_many(many, next_key)
+        key = next_key
+        for job, (k, p, s), split in zip(many, got, got_splits):
+            (k1, p1, s1), split1, key = fans.sector_polygons(*job[:5], key, cycle_squares=job[5])
+            assert np.array_equal(k, k1) and p.tobytes() == p1.tobytes() and s == s1
+            assert split.keys() == split1.keys()
+            assert all(a[0] == b[0] and np.array_equal(a[1], b[1])
+                       for q in split for a, b in zip(split[q], split1[q]))
+        assert got_next == key
