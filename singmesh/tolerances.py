@@ -687,6 +687,12 @@ CREASE_DOUBLE_CROSS = 0.12
 #: come with exact gradients but not their second derivatives.
 CREASE_DIFF_STEP = 1e-7
 
+#: Vertices of the crease graph joined by an edge shorter than this many
+#: trace steps are one vertex: a corner placed by Gauss-Newton beside the
+#: trace's own vertex at the same point (1e-14 cells apart), as
+#: ``_no_repeats`` within one trace.  Far below any step or sagitta.
+CREASE_WELD = 1e-6
+
 #: Ends on the box of two creases closer than this many fine cells are
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).

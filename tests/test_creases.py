@@ -598,3 +598,37 @@ def test_stacked_boxes_touching_along_a_face(seed):
     b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
     _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, np.array(corners, float).T).T, starts=1500,
                          on=(a, b))
+
+
+def test_box_with_a_pocket_has_each_corner_once():
+    # A float-rotated box with a square pocket cut into its top (Max of the
+    # box and minus a smaller box): 16 corners of three creases each.  A
+    # corner placed by Gauss-Newton beside a trace's own vertex on it (a
+    # trace started at a sample there) was two vertices 1e-14 cells apart,
+    # joined by an edge of no length, read as two creases 0 cells apart:
+    # fine raised to its limit for them (at coarse 16, fine 64: 8192, 4.5
+    # million triangles in 333 s).
+    from singmesh.skeleton.creases import crease_curves, crease_gap
+    rot = _rotation(1)
+    u, v, w = (_lin(row) for row in rot)
+    eq = (f"Max(Max(Abs({u})-0.6, Abs({v})-0.6, Abs({w})-0.6), "
+          f"-Max(Abs({u})-0.3, Abs({v})-0.3, Abs({w}-0.6)-0.3))")
+    box = np.array([[-1.2, 1.2]] * 3)
+    cell = 2.4 / 64
+    curves = crease_curves(singmesh.Surface.parse(eq), box, step=cell)
+    corners = [[a, b, c] for a in (-0.6, 0.6) for b in (-0.6, 0.6) for c in (-0.6, 0.6)]
+    corners += [[a, b, c] for a in (-0.3, 0.3) for b in (-0.3, 0.3) for c in (0.3, 0.6)]
+    corners = np.linalg.solve(rot, np.array(corners).T).T
+    P, E = curves.points, curves.edges
+    # Each corner is one vertex of the crease graph, with nothing else within a thousandth of a
+    # cell of it, and three creases meet there.
+    d = np.linalg.norm(P[None] - corners[:, None], axis=2)
+    assert np.all(d.min(axis=1) <= 1e-12 * 2.4), d.min(axis=1)
+    assert np.all((d <= 1e-3 * cell).sum(axis=1) == 1), (d <= 1e-3 * cell).sum(axis=1)
+    degree = np.bincount(E.ravel(), minlength=len(P))
+    assert np.all(degree[d.argmin(axis=1)] == 3), degree[d.argmin(axis=1)]
+    # No edge of the graph has no length.
+    assert np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1).min() >= 1e-3 * cell
+    # The closest creases that are apart (the pocket's rim and the box's top edges, 0.3 apart in
+    # the rotated frame: at least 0.3 / sqrt(3) in the max norm) are cells apart, not 0.
+    assert crease_gap(curves, box, 6) >= 0.3 / np.sqrt(3) / cell
