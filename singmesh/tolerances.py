@@ -629,6 +629,12 @@ CREASE_JUMP = 1e-6
 #: enclosing Min at 1e-17 pick a piece at random), far below any feature.
 CREASE_SIDE_STEP = 1e-7
 
+#: Points on the circle of radius CREASE_SIDE_STEP round a crease on which
+#: the crossings of F = 0 are found (elementary._Kink._around_differ):
+#: two half-sheets at an angle down to 360 / CREASE_AROUND degrees apart
+#: are two crossings (a box's edge is 90).
+CREASE_AROUND = 12
+
 #: A tie of a Max/Min is on top when no third argument exceeds it by more
 #: than this times the arguments' size (a corner where three tie is
 #: still active, to rounding).
