@@ -917,7 +917,14 @@ class _Kink(CreaseSystem):
             # with an argument of the same gradient (coplanar faces of two
             # boxes joined by Min), which piece is picked at the point is
             # rounding, and the jump there is none.
-            ok &= self._around_differ(p)
+            # Where that step says no jump, the circle round the crease
+            # is asked (:meth:`_around_differ`): only there, as it costs
+            # a dozen values of F per point.
+            side = self._sides_differ(p)
+            redo = np.nonzero(ok & ~side)[0]
+            if len(redo):
+                side[redo] = self._around_differ(p[redo])
+            ok &= side
         return ok & np.isfinite(fv)
 
     def _around_differ(self, p: np.ndarray) -> np.ndarray:
@@ -932,9 +939,9 @@ class _Kink(CreaseSystem):
         are: where three faces meet along one line (the rim of a box
         standing on a larger one, joined by Min), the kink's own pieces and
         a step along grad G2 land on ties of the enclosing Min whose piece
-        is rounding, and the kink came and went along the rim.  Where the
-        plane is not defined (grad G1 along grad G2), or F does not cross
-        the circle twice, the test of :meth:`_sides_differ`.
+        is rounding, and the kink came and went along the rim.  False where
+        the plane is not defined (grad G1 along grad G2), or F does not
+        cross the circle twice.
         """
         g = self._s._graph
         _, d = self.values(p)
@@ -958,8 +965,6 @@ class _Kink(CreaseSystem):
         change = pos != np.roll(pos, -1, axis=1)  # between sample i and i + 1
         two = (change.sum(axis=1) == 2) & np.isfinite(f).all(axis=1) & plane
         out = np.zeros(len(p), bool)
-        if not two.all():
-            out[~two] = self._sides_differ(p[~two])
         rows = np.nonzero(two)[0]
         if len(rows):
             i = np.argsort(~change[rows], axis=1, kind="stable")[:, :2]  # the two crossings
