@@ -917,8 +917,68 @@ class _Kink(CreaseSystem):
             # with an argument of the same gradient (coplanar faces of two
             # boxes joined by Min), which piece is picked at the point is
             # rounding, and the jump there is none.
-            ok &= self._sides_differ(p)
+            # Where that step says no jump, the circle round the crease
+            # is asked (:meth:`_around_differ`): only there, as it costs
+            # a dozen values of F per point.
+            side = self._sides_differ(p)
+            redo = np.nonzero(ok & ~side)[0]
+            if len(redo):
+                side[redo] = self._around_differ(p[redo])
+            ok &= side
         return ok & np.isfinite(fv)
+
+    def _around_differ(self, p: np.ndarray) -> np.ndarray:
+        """(n,) bool: F = 0 crosses a small circle round the crease at p where F's gradients differ.
+
+        ``CREASE_AROUND`` points on a circle of radius ``CREASE_SIDE_STEP``
+        (relative to the point's scale) in the plane across the crease
+        (tangent grad G1 x grad G2): F changes sign between neighbours where
+        the surface crosses it, and the kink is there when the gradients
+        of F at the two crossings differ (a flat face through p crosses it
+        twice with one gradient).  Only F's values tell where the crossings
+        are: where three faces meet along one line (the rim of a box
+        standing on a larger one, joined by Min), the kink's own pieces and
+        a step along grad G2 land on ties of the enclosing Min whose piece
+        is rounding, and the kink came and went along the rim.  False where
+        the plane is not defined (grad G1 along grad G2), or F does not
+        cross the circle twice.
+        """
+        g = self._s._graph
+        _, d = self.values(p)
+        t = np.cross(d[:, 0], d[:, 1])
+        tn = np.linalg.norm(t, axis=1)
+        plane = tn > tol.CREASE_JUMP * np.linalg.norm(d[:, 0], axis=1) * np.linalg.norm(d[:, 1], axis=1)
+        t = t / np.maximum(tn, 1e-300)[:, None]
+        # An orthonormal pair across t.
+        a = np.where((np.abs(t[:, :1]) < 0.9), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+        e1 = np.cross(t, a)
+        e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), 1e-300)
+        e2 = np.cross(t, e1)
+        k = tol.CREASE_AROUND
+        ang = 2 * np.pi * (np.arange(k) + 0.5) / k
+        r = tol.CREASE_SIDE_STEP * np.maximum(np.abs(p).max(axis=1), 1.0)
+        circle = np.cos(ang)[None, :, None] * e1[:, None] + np.sin(ang)[None, :, None] * e2[:, None]
+        ring = p[:, None] + r[:, None, None] * circle
+        (f,) = point_eval(g, [self._s._f], ring.reshape(-1, 3))
+        f = f.reshape(len(p), k)
+        pos = f >= 0
+        change = pos != np.roll(pos, -1, axis=1)  # between sample i and i + 1
+        two = (change.sum(axis=1) == 2) & np.isfinite(f).all(axis=1) & plane
+        out = np.zeros(len(p), bool)
+        rows = np.nonzero(two)[0]
+        if len(rows):
+            i = np.argsort(~change[rows], axis=1, kind="stable")[:, :2]  # the two crossings
+            j = (i + 1) % k
+            fi = np.take_along_axis(f[rows], i, 1)
+            fj = np.take_along_axis(f[rows], j, 1)
+            w = fi / (fi - fj)
+            ri = np.take_along_axis(ring[rows], i[..., None], 1)
+            rj = np.take_along_axis(ring[rows], j[..., None], 1)
+            x = ri + w[..., None] * (rj - ri)
+            grad = np.stack(point_eval(g, self._s._grad, x.reshape(-1, 3)), 1).reshape(len(rows), 2, 3)
+            size = np.linalg.norm(grad, axis=2).sum(axis=1)
+            out[rows] = np.linalg.norm(grad[:, 0] - grad[:, 1], axis=1) > tol.CREASE_JUMP * size
+        return out
 
     def _sides_differ(self, p: np.ndarray) -> np.ndarray:
         """(n,) bool: grad F differs a step ``CREASE_SIDE_STEP`` to either side of the tie G2 = 0 at p."""

@@ -409,14 +409,41 @@ class Mesh:
                 "near it the mesh is not right"]
 
     def crease_warnings(self) -> list[str]:
-        """Curves where F = 0 is not smooth that the mesh does not follow (roots of |u|): one line, or none."""
+        """Creases the mesh does not follow (roots of |u|), or a crease mesh open inside the box: lines, or none."""
+        out = []
+        one = self.crease_open_edges()
+        if len(one):
+            p = self.vertices[one[0, 0]]
+            out.append(f"the mesh of a surface with creases (sharp edges) is open inside the box: {len(one)} "
+                       f"edge(s) with one triangle, e.g. at ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}); it is not "
+                       "right there")
         roots = self.stats.get("unfollowed_creases", [])
         if not roots:
-            return []
+            return out
         name, p = roots[0]
-        return [f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
-                f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})): "
-                "the mesh does not follow them and is not right near them"]
+        return out + [f"F is not differentiable along {len(roots)} curve(s) of the surface where a root of |u| "
+                      f"vanishes (cuspidal creases, e.g. through ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})): "
+                      "the mesh does not follow them and is not right near them"]
+
+    def crease_open_edges(self) -> np.ndarray:
+        """(k, 2): the edges with one triangle inside the box (not in a face of it) of a mesh with creases.
+
+        None (an empty array) for a mesh without creases.  The tubes round
+        the creases of float-rotated boxes joined by Min (a box standing on
+        another) left strips of the faces next to them out: such a mesh is
+        said to be open (:meth:`crease_warnings`), not returned silently.
+        """
+        if not len(self.faces) or not any(c.type == "crease" for c in self.singular_curves):
+            return np.zeros((0, 2), np.int64)
+        edges, count = topology.edges_with_counts(self.faces)
+        one = edges[count == 1]
+        box = np.asarray(self.box, float)
+        size = 1e-9 * float(np.max(box[:, 1] - box[:, 0]))
+
+        def faces(q):
+            return np.concatenate([np.abs(q - box[:, 0]) <= size, np.abs(q - box[:, 1]) <= size], axis=1)
+
+        return one[~(faces(self.vertices[one[:, 0]]) & faces(self.vertices[one[:, 1]])).any(axis=1)]
 
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""

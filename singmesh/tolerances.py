@@ -644,6 +644,12 @@ CREASE_JUMP = 1e-6
 #: enclosing Min at 1e-17 pick a piece at random), far below any feature.
 CREASE_SIDE_STEP = 1e-7
 
+#: Points on the circle of radius CREASE_SIDE_STEP round a crease on which
+#: the crossings of F = 0 are found (elementary._Kink._around_differ):
+#: two half-sheets at an angle down to 360 / CREASE_AROUND degrees apart
+#: are two crossings (a box's edge is 90).
+CREASE_AROUND = 12
+
 #: A tie of a Max/Min is on top when no third argument exceeds it by more
 #: than this times the arguments' size (a corner where three tie is
 #: still active, to rounding).
@@ -706,6 +712,12 @@ CREASE_DOUBLE_CROSS = 0.12
 #: of grad G1 x grad G2 in the search for a crease's double point: G1 and G2
 #: come with exact gradients but not their second derivatives.
 CREASE_DIFF_STEP = 1e-7
+
+#: Vertices of the crease graph joined by an edge shorter than this many
+#: trace steps are one vertex: a corner placed by Gauss-Newton beside the
+#: trace's own vertex at the same point (1e-14 cells apart), as
+#: ``_no_repeats`` within one trace.  Far below any step or sagitta.
+CREASE_WELD = 1e-6
 
 #: Ends on the box of two creases closer than this many fine cells are
 #: joined along the surface's trace on the box face (twice the tubes'

@@ -955,6 +955,13 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
         owner = np.repeat(np.arange(len(lines)), np.diff(starts))
         E = E[~np.isin(owner[E[:, 0]], list(dropped))]
     E = remap[E]
+    # Vertices of the graph at one point to rounding are one: a corner
+    # placed by Gauss-Newton next to a trace's own vertex on it (a trace
+    # started at a sample there), 1e-14 cells apart, was an edge of no
+    # length whose two ends crease_gap read as creases 0 cells apart.
+    rep = _welded(P, E, set(special), tol.CREASE_WELD * h)
+    remap, E = rep[remap], rep[E]
+    special = {int(rep[v]): kind for v, kind in sorted(special.items(), key=lambda kv: rep[kv[0]] == kv[0])}
     E = E[E[:, 0] != E[:, 1]]
     E = np.unique(np.sort(E, axis=1), axis=0)
     used = np.zeros(len(P), bool)
@@ -969,6 +976,7 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     base = 0
     for k, (s, p, closed, how) in enumerate(lines):
         verts = new[remap[base + np.arange(len(p))]]
+        verts = verts[np.r_[True, verts[1:] != verts[:-1]]]  # (welded neighbours)
         base += len(p)
         if k in dropped:
             continue
@@ -978,6 +986,25 @@ def _curve_set(systems: list, lines: list, box: np.ndarray, step: float) -> Curv
     specials = [SpecialPoint(point=P[v].copy(), kind=special[v]) for v in sp_vertices]
     return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
                     special_vertex=np.asarray(sp_vertices, np.int64), wide=np.zeros(len(E), bool))
+
+
+def _welded(P: np.ndarray, E: np.ndarray, keep: set, reach: float) -> np.ndarray:
+    """For each vertex, the vertex it is one with: ends of edges shorter than ``reach``, joined.
+
+    Of a group, a vertex in ``keep`` (a special point) stands for it, else the first.
+    """
+    rep = np.arange(len(P))
+    short = E[np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) < reach]
+    short = short[short[:, 0] != short[:, 1]]
+    if not len(short):
+        return rep
+    g = nx.Graph()
+    g.add_edges_from(short.tolist())
+    for comp in nx.connected_components(g):
+        comp = sorted(comp)
+        head = next((v for v in comp if v in keep), comp[0])
+        rep[comp] = head
+    return rep
 
 
 def merge_curve_sets(a: CurveSet, b: CurveSet) -> CurveSet:
