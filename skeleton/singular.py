@@ -234,7 +234,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     # Starts along a curve the clump test missed (a clump of candidates
     # spread over a sheet, where Newton across does not settle) end densely
     # along it: a chain of end points CURVE_SPAN boxes long.
-    x, more = _dense_chains(x, cell)
+    x, more = _dense_chains(surface, x, cell)
     curve |= more
     if len(x) == 0:
         return [], curve
@@ -269,9 +269,11 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
                 q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit, first=known)
             except NotSingularError:
                 continue  # singular only to the loose test
-            if kind.milnor is None and _on_curve(surface, q, cell):
+            if kind.milnor is None and _on_curve(surface, q, cell, steps=(2, 4, 8)):
                 # Non-simple: on a curve of singular points (its neighbours
-                # are singular too), or an isolated point of higher type.
+                # are singular too), or an isolated point of higher type
+                # (x^2 - y^6 - z^4 is singular to CURVE_RESIDUAL two boxes
+                # along y at level 8, not four; x^3 + y^7 + z^2 not eight).
                 curve = True
                 regions.append((q, 3.0 * cell))
                 continue
@@ -431,12 +433,16 @@ def _on_curve_many(surface: Surface, points: np.ndarray, cell: float, steps=(2,)
     return out
 
 
-def _dense_chains(x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:
+def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:
     """Newton end points not in a dense chain, and whether there was one.
 
     Single-linkage clusters at two boxes spanning ``CURVE_SPAN`` boxes or
     more with at least one end point per two boxes of their span: end
-    points along a curve.  Nodes, even hundreds, are boxes apart.
+    points along a curve.  Nodes, even hundreds, are boxes apart.  The
+    ends round a very flat isolated point spread so too (x^2 - y^6 - z^4:
+    |grad F| ~ d^5, below SINGULAR_LOOSE over 12 boxes at level 8), but
+    from its most singular end, 4 and 8 boxes along the Hessian's kernel
+    nothing is singular (:func:`_on_curve`): those stay starts.
     """
     from scipy.cluster.hierarchy import fcluster, linkage
 
@@ -444,11 +450,17 @@ def _dense_chains(x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:
         return x, False
     labels = fcluster(linkage(x, method="single", metric="euclidean"), t=2.0 * cell, criterion="distance")
     drop = np.zeros(len(x), bool)
+    res = None
     for lab in np.unique(labels):
         sel = labels == lab
         span = float(np.ptp(x[sel], axis=0).max())
         if span >= tol.CURVE_SPAN * cell and sel.sum() >= 0.5 * span / cell:
-            drop |= sel
+            if res is None:
+                res = residual(surface, x)
+            members = np.flatnonzero(sel)
+            best = members[np.argmin(res[members])]
+            if _on_curve(surface, x[best], cell, steps=(4, 8)):
+                drop |= sel
     return x[~drop], bool(drop.any())
 
 

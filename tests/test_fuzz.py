@@ -523,3 +523,30 @@ def test_judge_flags_a_broken_mesh(monkeypatch):
 
     monkeypatch.setattr(singmesh, "mesh", empty)
     assert "empty-with-sign-change" in fc.judge(case).failures
+
+
+@pytest.mark.parametrize("name, text, seed, shift", [
+    ("W x^2 - y^6 - z^4 rotated", "x^2 - y^6 - z^4", 5, (0.05, -0.1, 0.02)),
+    ("J10 rotated", "x^3 + y^6 + z^2", 5, (0.05, -0.1, 0.02)),
+])
+def test_non_simple_germ_at_the_defaults_is_one_point(name, text, seed, shift):
+    """At the default coarse 32 / fine 256, the Newton ends round a very
+    flat point (|grad F| ~ d^5 a distance d from it) spread over more than
+    eight boxes of the point search like the ends along a curve: on main
+    they were dropped as 'a curve of singular points that could not be
+    traced', and the point was lost."""
+    import warnings
+
+    import singmesh
+
+    text = _rotated(text, seed, shift)
+    q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    apex = np.linalg.solve(q, np.array(shift))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", singmesh.SingularPointWarning)
+        m = singmesh.mesh(text, ((-1.0, 1.0),) * 3)
+    assert len(m.singularities) == 1
+    s = m.singularities[0]
+    assert s.classification.name == "non-simple"
+    assert np.linalg.norm(np.asarray(s.point) - apex) <= 1e-12
+    assert s.vertex is not None
