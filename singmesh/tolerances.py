@@ -446,6 +446,16 @@ CURVE_CLIP_ROUNDS = 30
 #: _bisect_exit): 2^-50 of a step is rounding level for the end.
 CURVE_CLIP_BISECT = 50
 
+#: A curve's end on the box within this many trace steps of a second face
+#: is tried on the box edge between the two (skeleton.singular_curves.
+#: _onto_box_edge): a cuspidal edge through a box edge is located across
+#: itself to ~1e-8 only, far below this; a curve passing beside the edge
+#: is told apart by the residual, not by this distance.
+CURVE_EDGE_SNAP = 1e-4
+#: Gauss-Newton steps along the box edge (quadratic convergence from
+#: 1e-4 steps away: a few suffice; rounding level stops them earlier).
+CURVE_EDGE_NEWTON = 8
+
 #: Other changes of type (read from the arcs on a circle, which blur
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3
