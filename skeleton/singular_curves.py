@@ -1280,7 +1280,13 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
             # Only where this stretch needs it: the rest keeps the usual tube;
             # and not inside the balls round crossings of cuspidal edges,
             # which are tube whole (a wide tube there joined other sheets).
-            far = (reach[c.vertices] > tol.CURVE_TANGENT_RADIUS) & ~in_meet_ball[c.vertices]
+            # Needed beyond the usual tube's reach into non-simple leaves
+            # (CURVE_TUBE_RADIUS + CURVE_TUBE_GROW), not only beyond the
+            # wide tube's least radius: just outside the ball round a
+            # crossing of cuspidal edges (rotated Crixxi) the half-sheets
+            # are 1.5 cells apart only 8 to 10 cells out, and a lattice
+            # edge 5.7 cells out crossed both (an edge of four triangles).
+            far = (reach[c.vertices] > tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW) & ~in_meet_ball[c.vertices]
             v_wide[c.vertices[far]] = True
             need[c.vertices[far]] = reach[c.vertices[far]]
     wide = v_wide[curves.edges].all(axis=1)
