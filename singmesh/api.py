@@ -220,15 +220,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     asked = fine_level - raises
     gap = crease_gap(creases, b, fine_level)
     raised = _fine_for_creases(gap, fine_level)
-    # So do two curves of singular points (their tubes merge and the
-    # half-sheets between them have no rail: triangles across from one
-    # curve to the other, open edges, at 11 and 12 cells); not where they
-    # meet at a special point (its ball is tube).
-    curve_gap = crease_gap(curves, b, fine_level, norm=2.0, within=tol.CURVE_MIN_GAP, skip=_near_specials(curves, cell))
     gap_asked = (gap, fine_level) if raised > fine_level else None  # for a refusal's message
-    curve_raised = _fine_for_curves(curve_gap, fine_level)
-    curve_asked = (curve_gap, fine_level) if curve_raised > fine_level else None
-    raised = max(raised, curve_raised)
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -285,8 +277,6 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             if gap_asked[0] < 1:
                 why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
                         "are creases 0 apart)")
-        elif curve_asked is not None:
-            why = f"curves of singular points {curve_asked[0]:.3g} fine cells apart at fine {1 << curve_asked[1]}"
         else:
             why = "crease strips that failed on the coarser lattices"
         raise MemoryBudgetError(f"{e}; fine was raised from {1 << asked} to {1 << fine_level} for {why}") from None
@@ -487,26 +477,6 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
                 "and are not meshed")
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
     return f"empty mesh: the surface F = {surface} does not meet the box {where} (F is {sign} there)"
-
-
-def _near_specials(curves, cell: np.ndarray) -> np.ndarray:
-    """Which curve vertices lie within ``CURVE_BALL_GROW`` cells of a special point other than an end on the box."""
-    sp = np.array([s.point for s in curves.special if s.kind != "end on the box"]).reshape(-1, 3)
-    if len(sp) == 0 or len(curves.points) == 0:
-        return np.zeros(len(curves.points), bool)
-    d = cKDTree(sp / cell).query(curves.points / cell, p=np.inf)[0]
-    return d <= tol.CURVE_BALL_GROW
-
-
-def _fine_for_curves(gap: float, fine_level: int) -> int:
-    """The fine level at which curves of singular points ``gap`` fine cells apart are ``CURVE_MIN_GAP`` apart.
-
-    At most ``CURVE_MAX_RAISE`` levels more, and ``MAX_LEVEL``.
-    """
-    if gap >= tol.CURVE_MIN_GAP:
-        return fine_level
-    more = int(np.ceil(np.log2(tol.CURVE_MIN_GAP / max(gap, 1e-300))))
-    return min(fine_level + min(more, tol.CURVE_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _fine_for_creases(gap: float, fine_level: int) -> int:

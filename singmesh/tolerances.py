@@ -157,17 +157,6 @@ STAR_MAX_RAISE = 4
 #: The fine level is doubled until they are this far apart ...
 CREASE_MIN_GAP = 12.0
 
-#: Two curves of singular points closer than this many fine cells
-#: (Euclidean, away from the balls round their special points) share one
-#: tube as creases do: two double lines 11 and 12 cells apart (a plane
-#: cutting a thin cylinder, float-rotated) had triangles from one line to
-#: the other and open edges; 13 cells apart they do not.  The fine level
-#: is doubled until they are this far apart, at most CURVE_MAX_RAISE times
-#: (once: curves tangent at a triple point, 3 cells apart beyond its ball,
-#: took 2.5 times as long at two).
-CURVE_MIN_GAP = 12.5
-CURVE_MAX_RAISE = 1
-
 #: ... at most this many levels (8 times finer); closer creases keep the
 #: lattice and the gap is reported in Mesh.stats.
 CREASE_MAX_RAISE = 3

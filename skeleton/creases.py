@@ -426,16 +426,14 @@ def crease_curves(surface: Surface, box, step: float, level: int | None = None) 
     return _join_on_box(surface, _curve_set(systems, lines, box, step), box, step)
 
 
-def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int, norm: float = np.inf,
-               within: float = tol.CREASE_MIN_GAP, skip: np.ndarray | None = None) -> float:
+def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int) -> float:
     """The smallest distance (max norm, fine cells) between two points of the creases that are apart.
 
     Two vertices of the curve graph are apart when the way between them
     along the graph is more than ``CREASE_GAP_DETOUR`` times their distance
     (two creases, or two stretches of one; not two creases near the corner
     where they meet).  ``inf`` when no such pair is closer than
-    ``within`` cells.  Also for curves of singular points: distances in
-    the ``norm`` given (Minkowski p), vertices ``skip`` (bool) left out.
+    ``CREASE_MIN_GAP`` cells.
     """
     n = len(curves.points)
     if n < 2:
@@ -443,9 +441,7 @@ def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int, norm: float =
     box = np.asarray(box, dtype=float)
     cell = (box[:, 1] - box[:, 0]) / (1 << fine_level)
     p = curves.points / cell
-    pairs = cKDTree(p).query_pairs(within, p=norm, output_type="ndarray")
-    if skip is not None and len(pairs):
-        pairs = pairs[~(skip[pairs[:, 0]] | skip[pairs[:, 1]])]
+    pairs = cKDTree(p).query_pairs(tol.CREASE_MIN_GAP, p=np.inf, output_type="ndarray")
     if len(pairs) == 0:
         return float("inf")
     d = np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
@@ -464,7 +460,7 @@ def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int, norm: float =
     w = np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) + 1e-9
     graph = coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
     src, inv = np.unique(pairs[:, 0], return_inverse=True)
-    limit = tol.CREASE_GAP_DETOUR * within * np.sqrt(3.0)
+    limit = tol.CREASE_GAP_DETOUR * tol.CREASE_MIN_GAP * np.sqrt(3.0)
     way = dijkstra(graph, directed=False, indices=src, limit=limit)[inv.reshape(-1), pairs[:, 1]]
     apart = way > tol.CREASE_GAP_DETOUR * d
     # A small closed crease (a cone capped by a small disc) bends back on
@@ -476,7 +472,7 @@ def crease_gap(curves: CurveSet, box: np.ndarray, fine_level: int, norm: float =
     apart |= np.isfinite(bent) & (bent > tol.CREASE_LOOP_DETOUR * d)
     if not apart.any():
         return float("inf")
-    return float(np.linalg.norm(p[pairs[apart, 0]] - p[pairs[apart, 1]], ord=norm, axis=1).min())
+    return float(np.abs(p[pairs[apart, 0]] - p[pairs[apart, 1]]).max(axis=1).min())
 
 
 def _without_corners(graph, points: np.ndarray, edges: np.ndarray, n: int):
