@@ -461,6 +461,29 @@ CURVE_CLIP_ROUNDS = 30
 #: _bisect_exit): 2^-50 of a step is rounding level for the end.
 CURVE_CLIP_BISECT = 50
 
+#: A point the classifier reads as a simple type of at least this Milnor
+#: number is checked for a curve through it (skeleton.singular._continues):
+#: along a short arc of a double curve that turns within a few boxes, F is
+#: flat to rounding and reads A12 to A15 (the rotated parabola of
+#: test_fuzz's SHORT_ARCS).  The largest simple type meshed as a point in
+#: the tests and the judge is A5.
+CURVE_CHECK_MILNOR = 6
+#: ... by tracing the locus from it both ways (half-box steps, at most
+#: CURVE_CHECK_STEPS): a curve when both ways leave the cube of
+#: CURVE_CHECK_REACH boxes around it.
+CURVE_CHECK_REACH = 10.0
+CURVE_CHECK_STEPS = 80
+
+#: A curve's end on the box within this many trace steps of a second face
+#: is tried on the box edge between the two (skeleton.singular_curves.
+#: _onto_box_edge): a cuspidal edge through a box edge is located across
+#: itself to ~1e-8 only, far below this; a curve passing beside the edge
+#: is told apart by the residual, not by this distance.
+CURVE_EDGE_SNAP = 1e-4
+#: Gauss-Newton steps along the box edge (quadratic convergence from
+#: 1e-4 steps away: a few suffice; rounding level stops them earlier).
+CURVE_EDGE_NEWTON = 8
+
 #: Other changes of type (read from the arcs on a circle, which blur
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3

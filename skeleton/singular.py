@@ -277,6 +277,14 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
                 curve = True
                 regions.append((q, 3.0 * cell))
                 continue
+            if (kind.milnor or 0) >= tol.CURVE_CHECK_MILNOR and _continues(surface, q, cell):
+                # Read as a high A_k (F flat to rounding along a short,
+                # tightly turning arc of a double curve: the rotated
+                # parabola's A12 to A15), but the locus goes on along the
+                # Hessian's kernel both ways: a curve, not a point.
+                curve = True
+                regions.append((q, 3.0 * cell))
+                continue
             if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
                 continue
             r = r_start if q.tobytes() == p.tobytes() else float(residual(surface, q))
@@ -431,6 +439,35 @@ def _on_curve_many(surface: Surface, points: np.ndarray, cell: float, steps=(2,)
     out = np.zeros(len(points), bool)
     out[pt[hit]] = True
     return out
+
+
+def _continues(surface: Surface, p: np.ndarray, cell: float) -> bool:
+    """Whether the singular locus through ``p`` goes on as a curve along its Hessian's kernel.
+
+    The curve tracer (steps of half a box, shorter on tight turns, each
+    vertex Newton-corrected to a curve vertex's residual) followed from
+    ``p`` along a kernel direction, both ways: on a curve it leaves the
+    cube of ``CURVE_CHECK_REACH`` boxes around ``p`` (or comes round to
+    ``p``) both ways; from an isolated point of type A_k the residual
+    grows as the k-th power of the distance and the trace is lost within
+    a few boxes (an A12 of unit coefficients at 0.15, five boxes at level
+    6 and under the cube's 0.08 at level 8 only from A20 on).  Unlike
+    :func:`_on_curve` (straight steps), it follows an arc that turns
+    within two boxes (a parabola z = 8 x^2 near its vertex), and beyond
+    the box of the mesh (a short arc dipping into it).
+    """
+    from .singular_curves import _trace_one_way
+
+    w, v = np.linalg.eigh(surface.hessian(np.asarray(p, float)[None])[0])
+    scale = max(float(np.abs(w).max(initial=0.0)), 1e-300)
+    reach = tol.CURVE_CHECK_REACH * cell
+    cube = np.stack([p - reach, p + reach], axis=1)
+    for col in np.flatnonzero(np.abs(w) <= tol.CENTRE_RANK_RTOL * scale):
+        ways = [_trace_one_way(surface, cube, p, sign * v[:, col], 0.5 * cell, tol.CURVE_CHECK_STEPS)[1]
+                for sign in (1.0, -1.0)]
+        if all(how in ("box", "closed") for how in ways):
+            return True
+    return False
 
 
 def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndarray, bool]:

@@ -473,12 +473,54 @@ def _clip(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: fl
     # the box, where Newton across them converges slowly and the rounds
     # stop between a sample's residual and a vertex's; bisected, those
     # ends came off the second face, and open edges.
-    if not residual(surface, z[None])[0] > _limit(surface):
+    if residual(surface, z[None])[0] > _limit(surface):
+        w = _bisect_exit(surface, box, x, y, h)
+        if w is not None and residual(surface, w[None])[0] < residual(surface, z[None])[0]:
+            z = w
+    return _onto_box_edge(surface, box, z, axis, h)
+
+
+def _onto_box_edge(surface: Surface, box: np.ndarray, z: np.ndarray, axis: int, h: float) -> np.ndarray:
+    """The end z (on the face ``axis``) moved onto the box edge the curve leaves through, if it does.
+
+    A curve through an edge (or corner) of the box is located across
+    itself only to about the square root of rounding where its Hessian
+    has rank one (a cuspidal or tacnode edge: Crixxi's cuspidal edges
+    leave its test box through its edges), and its end lands on one face
+    a few 1e-8 off the other: the strips' boundary edges from it to the
+    rail on the other face then cut the box's corner (open edges inside
+    the box), how far off depending on the machine's rounding.  For an
+    end within ``CURVE_EDGE_SNAP`` steps of other faces, the curve's
+    point on the box edge (Gauss-Newton on F = grad F = 0 along the edge,
+    the other coordinates on their faces) replaces it when its residual
+    is no larger: the curve goes through the box edge to the input's
+    precision.  A curve passing beside the edge keeps its end.
+    """
+    lo, hi = box[:, 0], box[:, 1]
+    face = np.where(np.abs(z - lo) <= np.abs(z - hi), lo, hi)
+    near = np.abs(z - face) <= tol.CURVE_EDGE_SNAP * h
+    near[axis] = False
+    if not near.any():
         return z
-    w = _bisect_exit(surface, box, x, y, h)
-    if w is not None and residual(surface, w[None])[0] < residual(surface, z[None])[0]:
-        return w
-    return z
+    w = np.where(near, face, z)
+    free = [a for a in range(3) if a != axis and not near[a]]
+    with np.errstate(all="ignore"):
+        for _ in range(tol.CURVE_EDGE_NEWTON if free else 0):
+            f, g, hh = surface.jet(w[None])
+            r = np.concatenate([f, g[0]])
+            col = np.concatenate([g[0, free], hh[0, :, free[0]]])
+            den = float(col @ col)
+            if not den > 0.0:
+                break
+            step = float(col @ r) / den
+            if not np.isfinite(step) or abs(step) > tol.CURVE_EDGE_SNAP * h:
+                return z
+            w[free[0]] -= step
+            if abs(step) <= tol.CURVE_STOP * h:
+                break
+    if not (_inside(box, w) and residual(surface, w[None])[0] <= residual(surface, z[None])[0]):
+        return z
+    return w
 
 
 def _bisect_exit(surface: Surface, box: np.ndarray, x: np.ndarray, y: np.ndarray, h: float):
@@ -1238,7 +1280,13 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
             # Only where this stretch needs it: the rest keeps the usual tube;
             # and not inside the balls round crossings of cuspidal edges,
             # which are tube whole (a wide tube there joined other sheets).
-            far = (reach[c.vertices] > tol.CURVE_TANGENT_RADIUS) & ~in_meet_ball[c.vertices]
+            # Needed beyond the usual tube's reach into non-simple leaves
+            # (CURVE_TUBE_RADIUS + CURVE_TUBE_GROW), not only beyond the
+            # wide tube's least radius: just outside the ball round a
+            # crossing of cuspidal edges (rotated Crixxi) the half-sheets
+            # are 1.5 cells apart only 8 to 10 cells out, and a lattice
+            # edge 5.7 cells out crossed both (an edge of four triangles).
+            far = (reach[c.vertices] > tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW) & ~in_meet_ball[c.vertices]
             v_wide[c.vertices[far]] = True
             need[c.vertices[far]] = reach[c.vertices[far]]
     wide = v_wide[curves.edges].all(axis=1)
