@@ -816,3 +816,18 @@ IMPROVE_ON_BOX = 1e-12
 #: in reports and messages (1e300 is read exactly: 301 digits); the mesh
 #: uses the exact number.
 DISPLAY_DIGITS = 30
+
+#: Steps per side of a square in which the face curve is followed to pair
+#: the events of an ambiguous square on the box's boundary (two sheets'
+#: traces less than a cell apart, :func:`singmesh.boxes.faces.traced_pairs`):
+#: a step well under the traces' distance (half a cell and more where they
+#: are paired at all; closer, the curve's end on the face, where the tube's
+#: rails do not read them), so that the corrector stays on its own trace.
+FACE_TRACE_STEPS = 16
+#: Steps (accepted or halved) after which a trace that has not left its
+#: square is given up (the square keeps its pairing along the boundary).
+FACE_TRACE_MAX = 256
+#: A step is halved when its corrector moves the point more than this
+#: fraction of the step off the predicted one, or the curve's direction
+#: turns by more than 60 degrees (cosine 0.5) over it: another trace may be near.
+FACE_TRACE_DRIFT = 0.5
