@@ -372,8 +372,6 @@ def traced_pairs(surface: Surface, tree: Octree, events: Events, squares, inc: d
             exit_at[ok[out]] = (a + s[:, None] * (b - a))[out]
             active[ok[out]] = False
             p[ok[~out]] = qo[~out]
-            # After the first step a trace may come back to its own square's
-            # boundary only at an end (it is inside the square).
     done = np.isfinite(exit_at).all(axis=1)
     # Each trace's end: the nearest end event of its square.
     on_e = on & ~inc["is_start"]

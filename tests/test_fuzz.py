@@ -313,6 +313,26 @@ REGRESSIONS = [
      S1_610_BOX, 8, 64),
     ("two sheets at a small angle near a face, turned",
      _tilted_product(NEAR_FACE, (2, 0, 1), 0.03, (0.1, 0.95, 0.0), (0.0013, 0.0, -0.0021)), ((-1.0, 1.0),) * 3, 8, 64),
+    # The parabolic cylinder 7 y^2 = x / 5 touches the split plane x = 0
+    # along the lattice line x = y = 0, every lattice point of which is a
+    # zero (an event with the point's key).  The boxes round the line are
+    # of different sizes (some failed the simplicity test, some not): the
+    # polygons of the larger ones ran along it from corner to corner, of
+    # the smaller ones through every lattice point between (65 edges of one
+    # triangle; facets/polygons.py split_lattice_edges).
+    ("s1-314 a sheet touching a split plane along a lattice line",
+     "(7*y^2 - 1/5*x)*(0.252890243588101*z^2 + 1.3518127774103*x*z - 2.42289169494478*x*y - 1.86884130986558)",
+     ((-1.5, 1.5), (-1.5, 1.5), (-1.0, 1.0)), 8, 64),
+    # Of the same class: the cylinder along the x-axis touching y = 0 (the
+    # axes permuted), and along the lattice line x = 0.375, y = -0.1875
+    # (shifted; 20 and 24 open edges on main).
+    ("a cylinder touching y = 0 along the x-axis",
+     "(-y/5 + 7*z^2)*(0.252890243588101*x^2 + 1.3518127774103*x*y - 2.42289169494478*y*z - 1.86884130986558)",
+     ((-1.5, 1.5), (-1.0, 1.0), (-1.5, 1.5)), 8, 64),
+    ("a cylinder touching x = 0.375 along a lattice line",
+     "(-x/5 + 7*y^2 + 2.625*y + 0.32109375)*(-2.42289169494478*x*y + 1.3518127774103*x*z - 0.454292192802146*x"
+     " + 0.908584385604292*y + 0.252890243588101*z^2 - 0.506929791528862*z - 1.69848173756478)",
+     ((-1.5, 1.5), (-1.5, 1.5), (-1.0, 1.0)), 8, 64),
 ]
 
 
