@@ -831,3 +831,14 @@ FACE_TRACE_MAX = 256
 #: fraction of the step off the predicted one, or the curve's direction
 #: turns by more than 60 degrees (cosine 0.5) over it: another trace may be near.
 FACE_TRACE_DRIFT = 0.5
+
+#: Gauss-Newton steps towards a point of the singular locus where the
+#: Hessian vanishes too (skeleton/singular_curves.py _flat_point): linear
+#: (halving the distance) where F vanishes to fourth order, from a few
+#: cells to rounding level.
+CURVE_FLAT_NEWTON = 80
+#: Such a point is taken when its Hessian is at most this fraction of the
+#: Hessian where the search started (a fraction of a cell away): along a
+#: curve of rank-2 points the Hessian keeps its size, at a cone's apex on
+#: it (fourth order) it falls as the square of the distance.
+CURVE_FLAT = 1e-6

@@ -497,6 +497,47 @@ def test_an_untraced_arc_is_said(name, text, box):
         singmesh.mesh(text, box, coarse=8, fine=64)
 
 
+#: s1-270's factors: a quadric through the origin and a cubic cone with
+#: its apex there; their double curves meet at the apex.
+S1_270 = ("0.118365959345834*z^2 + 1.25814257648041*y^2 - 1.53978595412845*x*y - 2.37437628712255*x",
+          "-1*y*z^2 - 1*x*y^2 - 3/4*x^2*z - 7/2*x^2*y")
+#: (name, equation, apex): the apex of a cubic cone on a double curve,
+#: where F vanishes to fourth order (the quadric's first order times the
+#: cone's third): s1-270, and cones on quadrics turned (0.3 rad about
+#: (1, 2, 3)) with the apex moved to (0.05, -0.03, 0.02).
+APEX_ON_CURVES = [
+    ("s1-270", "*".join(f"({f})" for f in S1_270), (0.0, 0.0, 0.0)),
+    ("s1-270 turned", _tilted_product(S1_270, (1, 2, 3), 0.3, (0.0, 0.0, 0.0), (0.05, -0.03, 0.02)),
+     (0.05, -0.03, 0.02)),
+    ("another quadric, turned", _tilted_product(("x - 0.4*y^2 + 0.3*z^2 - 0.2*y*z", S1_270[1]), (1, 2, 3), 0.3,
+                                                (0.0, 0.0, 0.0), (0.05, -0.03, 0.02)), (0.05, -0.03, 0.02)),
+]
+
+
+@pytest.mark.parametrize("name, text, apex", APEX_ON_CURVES, ids=[c[0] for c in APEX_ON_CURVES])
+def test_cone_apex_on_a_curve_is_a_vertex(name, text, apex):
+    """Where the curves meet at a point of higher type, the special point is
+    that point (to the 1e-8 that F, vanishing to fourth order there, allows
+    in doubles) and a mesh vertex: on main the traces lost near the apex
+    were joined 0.009 (s1-270) to 0.05 (turned) from it."""
+    import warnings
+
+    import singmesh
+
+    case = fc.case_from_text(name, text, ((-1.0, 1.0),) * 3)
+    f = fc.Field(case.poly)
+    apex = np.array(apex)
+    # The apex is a zero of F and grad F (exact rationals of the typed
+    # coefficients, the turned ones to their rounding).
+    assert abs(f.value(apex[None])[0]) < 1e-12 and np.abs(f.grad(apex[None])).max() < 1e-12
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = singmesh.mesh(text, ((-1.0, 1.0),) * 3, coarse=8, fine=64)
+    special = np.array([s.point for s in m.special_points])
+    assert np.linalg.norm(special - apex, axis=1).min() <= 1e-6, special
+    assert np.linalg.norm(np.asarray(m.vertices) - apex, axis=1).min() <= 1e-6
+
+
 @pytest.mark.parametrize("index", range(SAMPLE_SIZE))
 def test_fuzz_sample(index):
     case = fc.make_case(SAMPLE_SEED, index)
