@@ -260,23 +260,57 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
     if retry.any():
         mode = np.where(retry, 2, mode)
         link_sq, start, end, bad = pair_events(inc, mode, len(squares))
-    ambiguous = mode == 2
-    if tubes:
-        # On the box's faces a tube's rails follow the traces of its
-        # half-sheets: where two of them run less than a cell apart their
-        # squares hold both (no graph axis), and the pairing along the
-        # boundary joins one sheet's trace to the other's (fuzz s1-610).
-        # There the face curve is followed across the square instead; a
-        # square with two events has one pairing, which it confirms (the
-        # other sheet's trace may cross it unseen, between two roots on
-        # one of its edges closer than the root finder separates).
-        which = ambiguous & ~bad & (counts >= 2) & ((minus < 0) | (plus < 0))
-        if which.any():
-            link_sq, start, end, traced = traced_pairs(surface, tree, events, squares, inc, which,
-                                                       (link_sq, start, end))
-            ambiguous = ambiguous & ~traced
     return FaceLinks(square=squares, minus=minus, plus=plus, link_square=link_sq,
-                     start=start, end=end, ambiguous=ambiguous, inconsistent=bad)
+                     start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
+
+
+def rail_links(surface: Surface, tree: Octree, events: Events, links: FaceLinks, in_tube: np.ndarray,
+               curve: np.ndarray | None = None, radius: float = 0.0) -> FaceLinks:
+    """The links with the tube's squares on the box's faces that have no graph axis paired by tracing.
+
+    On the box's faces a tube's rails follow the traces of its
+    half-sheets: where two of them run less than a cell apart their
+    squares have no graph axis, and the pairing along the boundary joins
+    one sheet's trace to the other's (fuzz s1-610), so such links were
+    left out of the rails and the traces broke.  The face curve is
+    followed across those squares instead (:func:`traced_pairs`; a square
+    with two events has one pairing, which it confirms: another trace may
+    cross it unseen, between two roots on one edge closer than the root
+    finder separates).  Only the rails read these links (``in_tube``:
+    (N,) bool, the tube's leaves): the boxes' own cycles keep theirs.
+    Squares with an event within ``radius`` of the points ``curve`` (k, 3)
+    are left as they are: there the traces meet at the curve, and near a
+    curve of higher corank its events are as far off F = 0 as its tiny
+    gradient makes them (fuzz s1-704: a rail vertex 1.9e-9 of the box off).
+    """
+    leaf = np.where(links.minus >= 0, links.minus, links.plus)
+    which = (links.ambiguous & ~links.inconsistent & ((links.minus < 0) | (links.plus < 0)) & (leaf >= 0)
+             & in_tube[np.maximum(leaf, 0)])
+    if not which.any():
+        return links
+    idx = np.nonzero(which)[0]
+    sub = links.square[idx]
+    inc = square_events(events, sub)
+    counts = np.bincount(inc["sq"], minlength=len(sub))
+    if curve is not None and len(curve):
+        from scipy.spatial import cKDTree
+
+        close = cKDTree(curve).query(events.point[inc["ev"]], distance_upper_bound=radius)[0] <= radius
+        counts[inc["sq"][close]] = 0
+    local = np.full(len(links.square), -1, np.int64)
+    local[idx] = np.arange(len(idx))
+    mine = which[links.link_square]
+    l_sq, l_start, l_end, traced = traced_pairs(
+        surface, tree, events, sub, inc, counts >= 2,
+        (local[links.link_square[mine]], links.start[mine], links.end[mine]))
+    link_square = np.concatenate([links.link_square[~mine], idx[l_sq]])
+    start = np.concatenate([links.start[~mine], l_start])
+    end = np.concatenate([links.end[~mine], l_end])
+    order = np.argsort(link_square, kind="stable")
+    ambiguous = links.ambiguous.copy()
+    ambiguous[idx[traced]] = False
+    return FaceLinks(square=links.square, minus=links.minus, plus=links.plus, link_square=link_square[order],
+                     start=start[order], end=end[order], ambiguous=ambiguous, inconsistent=links.inconsistent)
 
 
 def traced_pairs(surface: Surface, tree: Octree, events: Events, squares, inc: dict, which: np.ndarray, links):

@@ -152,16 +152,16 @@ def _square_bounds_many(tree, squares: np.ndarray):
 
 
 def add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id: int, key0: int,
-               cell: float, box: np.ndarray, surface=None):
+               cell: float, box: np.ndarray, surface=None, traced=None):
     """The polygons with the tube's strips (triangles from rails to the curve) appended.
 
     ``offsets, keys, pts, apex`` as from :func:`facet_polygons`; the strips
     are :func:`singmesh.facets.tubes.tube_triangles` of the tube's links
     (``grouped``: :func:`singmesh.facets.cycles.box_links` with the tube as
     box ``tube_id``), the curve points keyed from ``key0`` on; ``surface`` as in
-    :func:`~singmesh.facets.tubes.tube_triangles`.
+    :func:`~singmesh.facets.tubes.tube_triangles`, as is ``traced``.
     """
-    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box, surface)
+    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box, surface, traced)
     n = len(tri_keys)
     offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
     keys = np.concatenate([keys, tri_keys.ravel()])
