@@ -313,6 +313,17 @@ REGRESSIONS = [
      S1_610_BOX, 8, 64),
     ("two sheets at a small angle near a face, turned",
      _tilted_product(NEAR_FACE, (2, 0, 1), 0.03, (0.1, 0.95, 0.0), (0.0013, 0.0, -0.0021)), ((-1.0, 1.0),) * 3, 8, 64),
+    # What that tracing must not do: join a face trace between a curve's
+    # two ends on one face (the curve dips 22 cells into the box) into a
+    # rail (s1-354: 64 edges of 3 triangles), nor make a face event next to
+    # a corank-2 curve 0.01 inside the face a rail vertex (s1-704: 1.9e-9
+    # of the box off F = 0).  Both clean on main; the rails alone read the
+    # traced links, away from the curve.
+    ("s1-354 a face trace between a curve's two ends",
+     "(-1*y^2*z - 8/3*y*z - 1/2)*(2.04487238258283*z^2 + 1.38447019979468*y^2 - 0.345692485738249*x*z"
+     " - 0.504466901936883)", ((-1.0, 1.0),) * 3, 8, 64),
+    ("s1-704 face events next to a corank-2 curve", "3/2*z^6 + 5*x*y*z^4 - 4/5*x^2*y^3*z + 2/5*x*y^4",
+     ((-0.6883937731600414, 0.9255983774225047), (-1.7072045285851571, 0.28921517033651534), (-0.01, 0.87)), 8, 64),
     # The parabolic cylinder 7 y^2 = x / 5 touches the split plane x = 0
     # along the lattice line x = y = 0, every lattice point of which is a
     # zero (an event with the point's key).  The boxes round the line are
