@@ -264,6 +264,190 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
                      start=start, end=end, ambiguous=mode == 2, inconsistent=bad)
 
 
+def rail_links(surface: Surface, tree: Octree, events: Events, links: FaceLinks, in_tube: np.ndarray,
+               curve: np.ndarray | None = None, radius: float = 0.0) -> FaceLinks:
+    """The links with the tube's squares on the box's faces that have no graph axis paired by tracing.
+
+    On the box's faces a tube's rails follow the traces of its
+    half-sheets: where two of them run less than a cell apart their
+    squares have no graph axis, and the pairing along the boundary joins
+    one sheet's trace to the other's (fuzz s1-610), so such links were
+    left out of the rails and the traces broke.  The face curve is
+    followed across those squares instead (:func:`traced_pairs`; a square
+    with two events has one pairing, which it confirms: another trace may
+    cross it unseen, between two roots on one edge closer than the root
+    finder separates).  Only the rails read these links (``in_tube``:
+    (N,) bool, the tube's leaves): the boxes' own cycles keep theirs.
+    Squares with an event within ``radius`` of the points ``curve`` (k, 3)
+    are left as they are: there the traces meet at the curve, and near a
+    curve of higher corank its events are as far off F = 0 as its tiny
+    gradient makes them (fuzz s1-704: a rail vertex 1.9e-9 of the box off).
+    """
+    leaf = np.where(links.minus >= 0, links.minus, links.plus)
+    which = (links.ambiguous & ~links.inconsistent & ((links.minus < 0) | (links.plus < 0)) & (leaf >= 0)
+             & in_tube[np.maximum(leaf, 0)])
+    if not which.any():
+        return links
+    idx = np.nonzero(which)[0]
+    sub = links.square[idx]
+    inc = square_events(events, sub)
+    counts = np.bincount(inc["sq"], minlength=len(sub))
+    if curve is not None and len(curve):
+        from scipy.spatial import cKDTree
+
+        close = cKDTree(curve).query(events.point[inc["ev"]], distance_upper_bound=radius)[0] <= radius
+        counts[inc["sq"][close]] = 0
+    local = np.full(len(links.square), -1, np.int64)
+    local[idx] = np.arange(len(idx))
+    mine = which[links.link_square]
+    l_sq, l_start, l_end, traced = traced_pairs(
+        surface, tree, events, sub, inc, counts >= 2,
+        (local[links.link_square[mine]], links.start[mine], links.end[mine]))
+    link_square = np.concatenate([links.link_square[~mine], idx[l_sq]])
+    start = np.concatenate([links.start[~mine], l_start])
+    end = np.concatenate([links.end[~mine], l_end])
+    order = np.argsort(link_square, kind="stable")
+    ambiguous = links.ambiguous.copy()
+    ambiguous[idx[traced]] = False
+    return FaceLinks(square=links.square, minus=links.minus, plus=links.plus, link_square=link_square[order],
+                     start=start[order], end=end[order], ambiguous=ambiguous, inconsistent=links.inconsistent)
+
+
+def traced_pairs(surface: Surface, tree: Octree, events: Events, squares, inc: dict, which: np.ndarray, links):
+    """The links of the squares ``which`` found by following the face curve from each start event.
+
+    From each start event of such a square the curve F = 0 in the square's
+    plane is followed (predictor along its tangent, F + eps > 0 on the
+    left; corrector by Newton in the plane) with steps of the square's side
+    over ``FACE_TRACE_STEPS``, halved where the corrector drifts or the
+    curve turns (another trace near), until it leaves the square; the end
+    event nearest where it leaves is its end.  A square is re-paired only
+    where every start reaches a different end, none of its events is a
+    lattice point (the rule F + eps there is not the curve followed), and
+    the links do not cross: elsewhere its links stay as they were.
+
+    Parameters
+    ----------
+    links : (link_square, start, end) of :func:`pair_events`
+
+    Returns
+    -------
+    link_square, start, end : (K,) int64   the links, those of the re-paired squares replaced
+    traced : (Q,) bool                     the squares re-paired
+    """
+    link_sq, start, end = links
+    traced = np.zeros(len(squares), bool)
+    on = which[inc["sq"]]
+    snapped = np.zeros(len(squares), bool)
+    snapped[inc["sq"][on & events.snapped[inc["ev"]]]] = True
+    which = which & ~snapped
+    on = which[inc["sq"]]
+    if not on.any():
+        return link_sq, start, end, traced
+    sq_s = inc["sq"][on & inc["is_start"]]
+    ev_s = inc["ev"][on & inc["is_start"]]
+    n = squares[sq_s, 0]
+    ua, va = (n + 1) % 3, (n + 2) % 3
+    r = np.arange(len(sq_s))
+    lo_u = tree.box[ua, 0] + squares[sq_s, 2] * tree.cell[ua]
+    lo_v = tree.box[va, 0] + squares[sq_s, 3] * tree.cell[va]
+    hi_u = lo_u + squares[sq_s, 4] * tree.cell[ua]
+    hi_v = lo_v + squares[sq_s, 4] * tree.cell[va]
+    h0 = np.minimum(hi_u - lo_u, hi_v - lo_v) / tol.FACE_TRACE_STEPS
+    h = h0.copy()
+    p = events.point[ev_s].astype(float)
+    exit_at = np.full((len(sq_s), 3), np.nan)
+    active = np.ones(len(sq_s), bool)
+
+    def tangent(q, rows):
+        g = surface.gradient(q)
+        k = np.arange(len(rows))
+        t = np.stack([g[k, va[rows]], -g[k, ua[rows]]], axis=1)
+        norm = np.linalg.norm(t, axis=1, keepdims=True)
+        return np.where(norm > 0, t / np.where(norm > 0, norm, 1.0), np.nan)
+
+    with np.errstate(all="ignore"):
+        for _ in range(tol.FACE_TRACE_MAX):
+            idx = np.nonzero(active)[0]
+            if len(idx) == 0:
+                break
+            t = tangent(p[idx], idx)
+            q = p[idx].copy()
+            q[np.arange(len(idx)), ua[idx]] += h[idx] * t[:, 0]
+            q[np.arange(len(idx)), va[idx]] += h[idx] * t[:, 1]
+            guess = q.copy()
+            for _ in range(4):
+                f, g = surface.value_gradient(q)
+                gu, gv = g[np.arange(len(idx)), ua[idx]], g[np.arange(len(idx)), va[idx]]
+                gg = gu * gu + gv * gv
+                step = np.where(gg > 0, f / np.where(gg > 0, gg, 1.0), np.nan)
+                q[np.arange(len(idx)), ua[idx]] -= step * gu
+                q[np.arange(len(idx)), va[idx]] -= step * gv
+            drift = np.linalg.norm(q - guess, axis=1)
+            turn = np.einsum("ij,ij->i", tangent(q, idx), t)
+            good = (drift <= tol.FACE_TRACE_DRIFT * h[idx]) & (turn >= 0.5)
+            # A step that fails is halved; one too small gives the square up.
+            h[idx[~good]] /= 2
+            dead = idx[~good][h[idx[~good]] < 1e-3 * h0[idx[~good]]]
+            active[dead] = False
+            ok = idx[good]
+            qo = q[good]
+            u, v = qo[np.arange(len(ok)), ua[ok]], qo[np.arange(len(ok)), va[ok]]
+            out = (u < lo_u[ok]) | (u > hi_u[ok]) | (v < lo_v[ok]) | (v > hi_v[ok])
+            # Where the step leaves the square: its crossing of the boundary.
+            a, b = p[ok], qo
+            pu, pv = a[np.arange(len(ok)), ua[ok]], a[np.arange(len(ok)), va[ok]]
+            du, dv = u - pu, v - pv
+            s = np.ones(len(ok))
+            for lim, x0, dx, sign in ((lo_u[ok], pu, du, -1), (hi_u[ok], pu, du, 1),
+                                      (lo_v[ok], pv, dv, -1), (hi_v[ok], pv, dv, 1)):
+                cross = sign * dx > 0
+                s = np.where(cross, np.minimum(s, np.clip((lim - x0) / np.where(cross, dx, 1.0), 0, 1)), s)
+            exit_at[ok[out]] = (a + s[:, None] * (b - a))[out]
+            active[ok[out]] = False
+            p[ok[~out]] = qo[~out]
+    done = np.isfinite(exit_at).all(axis=1)
+    # Each trace's end: the nearest end event of its square.
+    on_e = on & ~inc["is_start"]
+    sq_e, ev_e = inc["sq"][on_e], inc["ev"][on_e]
+    matched = np.full(len(sq_s), -1, np.int64)
+    for k in np.nonzero(done)[0].tolist():
+        cand = ev_e[sq_e == sq_s[k]]
+        if len(cand) == 0:
+            continue
+        d = np.linalg.norm(events.point[cand] - exit_at[k], axis=1)
+        j = int(np.argmin(d))
+        if d[j] <= h0[k]:
+            matched[k] = cand[j]
+    good_sq = which.copy()
+    np.logical_and.at(good_sq, sq_s, matched >= 0)
+    for q in np.nonzero(good_sq)[0].tolist():
+        ends = matched[sq_s == q]
+        if len(np.unique(ends)) != len(ends) or not _non_crossing(inc, q, ev_s[sq_s == q], ends):
+            good_sq[q] = False
+    if not good_sq.any():
+        return link_sq, start, end, traced
+    keep = ~good_sq[link_sq]
+    new = good_sq[sq_s]
+    link_sq = np.concatenate([link_sq[keep], sq_s[new]])
+    start = np.concatenate([start[keep], ev_s[new]])
+    end = np.concatenate([end[keep], matched[new]])
+    order = np.argsort(link_sq, kind="stable")
+    return link_sq[order], start[order], end[order], good_sq
+
+
+def _non_crossing(inc: dict, q: int, starts: np.ndarray, ends: np.ndarray) -> bool:
+    """Whether the chords (start, end) of square ``q`` do not cross, by their places round its boundary."""
+    here = inc["sq"] == q
+    place = dict(zip(inc["ev"][here].tolist(), (inc["ccw"][here] + 1e-9 * inc["tie_ccw"][here]).tolist()))
+    chords = [tuple(sorted((place[a], place[b]))) for a, b in zip(starts.tolist(), ends.tolist())]
+    for i, (a, b) in enumerate(chords):
+        for c, d in chords[i + 1:]:
+            if (a < c < b) != (a < d < b):
+                return False
+    return True
+
+
 def _corner_events(surface: Surface, events: Events, squares, inc: dict, which: np.ndarray) -> np.ndarray:
     """Per incidence: an event at a corner of its square where F's gradient
     in the square's plane is not zero (only on the squares ``which``).

@@ -135,6 +135,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
                                            np.concatenate(parts_sq), splits)
+    offsets, keys, pts = split_lattice_edges(offsets, keys, pts, events, tree.fine_level)
     return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
 
 
@@ -152,19 +153,90 @@ def _square_bounds_many(tree, squares: np.ndarray):
 
 
 def add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id: int, key0: int,
-               cell: float, box: np.ndarray, surface=None):
+               cell: float, box: np.ndarray, surface=None, traced=None):
     """The polygons with the tube's strips (triangles from rails to the curve) appended.
 
     ``offsets, keys, pts, apex`` as from :func:`facet_polygons`; the strips
     are :func:`singmesh.facets.tubes.tube_triangles` of the tube's links
     (``grouped``: :func:`singmesh.facets.cycles.box_links` with the tube as
     box ``tube_id``), the curve points keyed from ``key0`` on; ``surface`` as in
-    :func:`~singmesh.facets.tubes.tube_triangles`.
+    :func:`~singmesh.facets.tubes.tube_triangles`, as is ``traced``.
     """
-    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box, surface)
+    tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box, surface, traced)
     n = len(tri_keys)
     offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
     keys = np.concatenate([keys, tri_keys.ravel()])
     pts = np.concatenate([pts, tri_pts.reshape(-1, 3)])
     apex = np.concatenate([apex, np.zeros(n, bool)])
     return offsets, keys, pts, apex
+
+
+def split_lattice_edges(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray, events, fine_level: int):
+    """The polygons with the events inserted at the lattice points between the ends of an edge along a lattice line.
+
+    Where the surface contains a lattice line (a parabolic cylinder
+    touching a split plane along it: fuzz s1-314), every lattice point on
+    it is a zero of F, an event with the point's key, and a box's links run
+    along the line from one of its corners to the next.  Boxes of
+    different sizes round the line have edges along it of different
+    lengths: the smaller boxes' polygons go through the lattice points
+    between the larger one's corners, its polygon does not, and the edges
+    on the line have one triangle each (65 open edges).  An edge of a
+    polygon from an event at a lattice point to one at another on the same
+    lattice line gets the events at the lattice points between them, in
+    order: every polygon along the line goes through the same vertices.
+
+    Parameters
+    ----------
+    offsets, keys, points : the polygons (as from :func:`facet_polygons`)
+    events : Events
+    fine_level : int   the lattice's level (keys of lattice points: :mod:`singmesh.boxes.edges`)
+    """
+    m = (1 << fine_level) + 1
+    on_lattice = events.key < m ** 3
+    if len(keys) == 0 or not on_lattice.any():
+        return offsets, keys, points
+    lk, first = np.unique(events.key[on_lattice], return_index=True)
+    lp = events.point[on_lattice][first]
+
+    def lattice(k):
+        return np.stack([k // (m * m), (k // m) % m, k % m], axis=-1)
+
+    n = len(keys)
+    sizes = np.diff(offsets)
+    nxt = np.arange(n) + 1
+    nxt[offsets[1:][sizes > 0] - 1] = offsets[:-1][sizes > 0]
+    a, b = keys, keys[nxt]
+    cand = np.isin(a, lk) & np.isin(b, lk)
+    if not cand.any():
+        return offsets, keys, points
+    ca, cb = lattice(a[cand]), lattice(b[cand])
+    along = ((ca == cb).sum(axis=1) == 2) & (np.abs(ca - cb).sum(axis=1) > 1)
+    idx = np.nonzero(cand)[0][along]
+    if len(idx) == 0:
+        return offsets, keys, points
+    cl = lattice(lk)
+    poly = np.repeat(np.arange(len(offsets) - 1), sizes)
+    insert_after = {}
+    for i, p, q in zip(idx.tolist(), ca[along], cb[along]):
+        axis = int(np.nonzero(p != q)[0][0])
+        o = [k for k in range(3) if k != axis]
+        t = cl[:, axis]
+        between = (cl[:, o[0]] == p[o[0]]) & (cl[:, o[1]] == p[o[1]]) & (t > min(p[axis], q[axis])) \
+            & (t < max(p[axis], q[axis]))
+        if between.any():
+            sel = np.nonzero(between)[0]
+            sel = sel[np.argsort(t[sel] if q[axis] > p[axis] else -t[sel])]
+            insert_after[i] = sel
+    if not insert_after:
+        return offsets, keys, points
+    out_k, out_p, sizes = [], [], sizes.copy()
+    last = 0
+    for i in sorted(insert_after):
+        out_k += [keys[last:i + 1], lk[insert_after[i]]]
+        out_p += [points[last:i + 1], lp[insert_after[i]]]
+        sizes[poly[i]] += len(insert_after[i])
+        last = i + 1
+    out_k.append(keys[last:])
+    out_p.append(points[last:])
+    return np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(out_k), np.concatenate(out_p)

@@ -96,7 +96,7 @@ def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
 
 
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray,
-                   surface=None):
+                   surface=None, traced=None):
     """The strips of the tube as triangles (keys (T, 3), points (T, 3, 3)); curve vertex j has key ``key0 + j``.
 
     With ``surface`` (F with kinks), a rail on a patch of F = 0 across
@@ -133,7 +133,11 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     if len(folds):
         turns = cKDTree(curves.points[folds]).query(curves.points)[0] <= (
             tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW) * cell
-    rail_list = rails(grouped, links, tube_id, far)
+    # The rails read the squares on the box's faces paired by tracing
+    # (``traced``: grouped and links of boxes.faces.rail_links), the face
+    # chords above the boxes' own pairing: a trace between two curve ends
+    # that only tracing joins leaves the tube's side (fuzz s1-354).
+    rail_list = rails(*(traced if traced is not None else (grouped, links)), tube_id, far)
     if surface is not None and rail_list:
         # Where two solids joined by Min touch along a face (two boxes
         # stacked), the contact patch is F = 0 with F < 0 on both sides:

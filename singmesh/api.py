@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from threadpoolctl import ThreadpoolController
 
 from singmesh.boxes.edges import compute_events
-from singmesh.boxes.faces import face_links, leaf_sides
+from singmesh.boxes.faces import face_links, leaf_sides, rail_links
 from singmesh.boxes.octree import refine_stars, subdivide
 from singmesh.boxes.sizing import CurvatureSizing, sizing_levels
 from singmesh.facets.assemble import assemble
@@ -322,9 +322,15 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     offsets, keys, pts, apex, branches = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id)
     key0 = curve_key0(events)
     if len(curves.points):
+        # The rails read the tube's squares on the box's faces paired by
+        # following the surface's trace (two sheets less than a cell apart
+        # there); the boxes' cycles keep their links.
+        r_links = rail_links(surf, tree, events, links, group == tube_id, avoid,
+                             tol.CURVE_TUBE_RADIUS * float(cell.max()))
+        traced = None if r_links is links else (box_links(r_links, group), r_links)
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
                                               tube_id, key0, float(cell.max()), b,
-                                              surf if len(creases.points) else None)
+                                              surf if len(creases.points) else None, traced)
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)

@@ -878,3 +878,30 @@ DISPLAY_DIGITS = 30
 #: (Nelder-Mead reaches rounding level at a kink or a double root).
 EMPTY_TOUCH_STARTS = 4
 EMPTY_TOUCH = 1e-12
+
+
+#: Steps per side of a square in which the face curve is followed to pair
+#: the events of an ambiguous square on the box's boundary (two sheets'
+#: traces less than a cell apart, :func:`singmesh.boxes.faces.traced_pairs`):
+#: a step well under the traces' distance (half a cell and more where they
+#: are paired at all; closer, the curve's end on the face, where the tube's
+#: rails do not read them), so that the corrector stays on its own trace.
+FACE_TRACE_STEPS = 16
+#: Steps (accepted or halved) after which a trace that has not left its
+#: square is given up (the square keeps its pairing along the boundary).
+FACE_TRACE_MAX = 256
+#: A step is halved when its corrector moves the point more than this
+#: fraction of the step off the predicted one, or the curve's direction
+#: turns by more than 60 degrees (cosine 0.5) over it: another trace may be near.
+FACE_TRACE_DRIFT = 0.5
+
+#: Gauss-Newton steps towards a point of the singular locus where the
+#: Hessian vanishes too (skeleton/singular_curves.py _flat_point): linear
+#: (halving the distance) where F vanishes to fourth order, from a few
+#: cells to rounding level.
+CURVE_FLAT_NEWTON = 80
+#: Such a point is taken when its Hessian is at most this fraction of the
+#: Hessian where the search started (a fraction of a cell away): along a
+#: curve of rank-2 points the Hessian keeps its size, at a cone's apex on
+#: it (fourth order) it falls as the square of the distance.
+CURVE_FLAT = 1e-6

@@ -740,6 +740,11 @@ def _join_lost(surface: Surface, lines: list, lost: list, h: float) -> list:
             meet = z[0] if ok[0] else None
         if meet is None:
             meet = ends[comp[0]]
+        # A point of higher type there (a cone's apex on the curve) is
+        # where the traces meet, exactly.
+        flat = _flat_point(surface, meet, tol.CURVE_JOIN * h)
+        if flat is not None:
+            meet = flat
         for c in comp:
             k, e = lost[c]
             p, closed = lines[k]
@@ -789,6 +794,46 @@ def _meeting_point(surface: Surface, ends: np.ndarray, directions: np.ndarray, h
     if good[0] and _degeneracy(surface, y[0], rank1) < _degeneracy(surface, z[0], rank1):
         return y[0]
     return z[0]
+
+
+def _flat_point(surface: Surface, x0: np.ndarray, reach: float) -> np.ndarray | None:
+    """The point within ``reach`` of x0 on the locus where the Hessian of F vanishes too, or None.
+
+    Where curves of singular points meet at a point of higher type (the
+    apex of a cubic cone on a double curve of the cone and another sheet:
+    fuzz s1-270, F vanishing to fourth order there), the traces are lost
+    short of it, and Newton from between their ends (or along a trace)
+    stops anywhere on the locus near it: the curves' meeting vertex was
+    0.3 cells off the apex (1.5 cells on a turned copy).  Gauss-Newton
+    on the Hessian's entries (Jacobian: the third derivatives), linear
+    where they vanish too, goes to such a point if there is one; the
+    point kept is the one of smallest Hessian, when that is at most
+    ``CURVE_FLAT`` of the Hessian at x0 and the point is on the locus.
+    """
+    iu = np.triu_indices(3)
+    x = np.asarray(x0, float).copy()
+    with np.errstate(all="ignore"):
+        h0 = float(np.abs(surface.hessian(x[None])[0]).max())
+        if not np.isfinite(h0) or h0 == 0.0:
+            return None
+        best, best_h = None, h0
+        for _ in range(tol.CURVE_FLAT_NEWTON):
+            t = surface.third_derivatives(x)
+            h = surface.hessian(x[None])[0]
+            step = np.linalg.lstsq(t[iu[0], iu[1], :], -h[iu], rcond=None)[0]
+            if not np.isfinite(step).all():
+                break
+            x = x + step
+            if np.linalg.norm(x - x0) > reach or np.linalg.norm(step) <= 1e-15 * max(1.0, float(np.abs(x).max())):
+                break
+            size = float(np.abs(surface.hessian(x[None])[0]).max())
+            if size < best_h:
+                best, best_h = x.copy(), size
+    if best is None or best_h > tol.CURVE_FLAT * h0:
+        return None
+    if residual(surface, best[None])[0] > _vertex_limit(surface):
+        return None
+    return best
 
 
 def _golden(f, lo: float, hi: float, steps: int) -> float:
@@ -962,6 +1007,9 @@ def _graph(polylines: list, surface: Surface, h: float):
                       and not polylines[line[m]][1]]
             same = [m for m in placed if np.linalg.norm(P[m] - P[placed[0]]) <= 1e-9 * h] if placed else []
             x = P[same[0]].copy() if len(same) >= 2 else _crossing_point(surface, p, int(local[i]), h)
+            flat = _flat_point(surface, x, 2.0 * h)
+            if flat is not None:
+                x = flat
             # All members within a step of the crossing (on every trace)
             # become that one vertex.
             near = np.nonzero(np.linalg.norm(P - x, axis=1) <= 0.75 * h)[0]
