@@ -879,7 +879,6 @@ DISPLAY_DIGITS = 30
 EMPTY_TOUCH_STARTS = 4
 EMPTY_TOUCH = 1e-12
 
-
 #: Steps per side of a square in which the face curve is followed to pair
 #: the events of an ambiguous square on the box's boundary (two sheets'
 #: traces less than a cell apart, :func:`singmesh.boxes.faces.traced_pairs`):
