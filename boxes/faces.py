@@ -191,6 +191,12 @@ def pair_events(inc: dict, mode: np.ndarray, n_squares: int):
         corner, key = inc["corner"][order], inc["key"][order]
         nxt = offset[sq] + (rank + 1) % np.maximum(counts[sq], 1)
         pair = corner & corner[nxt] & (key == key[nxt]) & (nxt != np.arange(len(sq))) & (mode[sq] == 2)
+        if "zero_side" in inc:
+            # Two corners of one side on which F is zero (see :func:`_zero_side_events`).
+            zs, u, v = inc["zero_side"][order], inc["u"][order], inc["v"][order]
+            along_u = zs[:, 0] & zs[nxt, 0] & (v == v[nxt]) & (u != u[nxt])
+            along_v = zs[:, 1] & zs[nxt, 1] & (u == u[nxt]) & (v != v[nxt])
+            pair |= (along_u | along_v) & (key != key[nxt]) & (mode[sq] == 2)
         if pair.any():
             want = np.full(n_squares, -1, np.int64)
             np.maximum.at(want, sq[pair], rank[pair] % 2)
@@ -253,6 +259,7 @@ def face_links(surface: Surface, tree: Octree, events: Events, group: np.ndarray
     mode = graph_modes(surface, tree, squares, owner, owner_side, which=counts >= (2 if tubes else 3))
     inc["key"] = events.key[inc["ev"]]
     inc["corner"] = _corner_events(surface, events, squares, inc, (mode == 2) & (counts >= 4))
+    inc["zero_side"] = _zero_side_events(surface, events, squares, inc, (mode == 2) & (counts >= 4))
     link_sq, start, end, bad = pair_events(inc, mode, len(squares))
     # A graph pairing that does not alternate start/end means rounding
     # defeated the sign test: pair those squares along the boundary instead.
@@ -473,6 +480,40 @@ def _corner_events(surface: Surface, events: Events, squares, inc: dict, which: 
     rounding = tol.ZERO_ULPS * np.finfo(float).eps * surface.gradient_magnitude(p)
     tangential = (g > rounding) & (np.arange(3)[None, :] != n[idx, None])
     out[idx] = tangential.any(axis=1)
+    return out
+
+
+def _zero_side_events(surface: Surface, events: Events, squares, inc: dict, which: np.ndarray) -> np.ndarray:
+    """Per incidence (K, 2) bool: an event at a corner of its square where F
+    is zero along the square's side in u (column 0) or in v (column 1) from
+    it and not across it (only on the squares ``which``).
+
+    A sheet through a lattice line, crossing the square's plane along it
+    (fuzz s2-136: the z-axis, the sheet tangent to y = 0 along it), makes
+    F zero on a side of the square and of one sign beside it.  Where that
+    sign is negative, F + eps = 0 (the rule of :mod:`.edges`) is a thin arc
+    along the side from one corner's event to the other's: a link of its
+    own.  The boundary pairing would join each corner's event to the next
+    event across the square instead (another sheet's trace there), and
+    the boxes on the sheet's other side got polygons along the line: the
+    lattice line's edges had four triangles.
+    """
+    sq = inc["sq"]
+    n, _, u0, v0, size = squares[sq].T
+    at = (events.snapped[inc["ev"]] & which[sq]
+          & ((inc["u"] == u0) | (inc["u"] == u0 + size)) & ((inc["v"] == v0) | (inc["v"] == v0 + size)))
+    out = np.zeros((len(sq), 2), bool)
+    idx = np.nonzero(at)[0]
+    if len(idx) == 0:
+        return out
+    p = events.point[inc["ev"][idx]]
+    g = np.abs(surface.gradient(p))
+    rounding = tol.ZERO_ULPS * np.finfo(float).eps * surface.gradient_magnitude(p)
+    rows = np.arange(len(idx))
+    ua, va = (n[idx] + 1) % 3, (n[idx] + 2) % 3
+    zu, zv = g[rows, ua] <= rounding[rows, ua], g[rows, va] <= rounding[rows, va]
+    out[idx, 0] = zu & ~zv
+    out[idx, 1] = zv & ~zu
     return out
 
 

@@ -346,6 +346,26 @@ REGRESSIONS = [
      "(-x/5 + 7*y^2 + 2.625*y + 0.32109375)*(-2.42289169494478*x*y + 1.3518127774103*x*z - 0.454292192802146*x"
      " + 0.908584385604292*y + 0.252890243588101*z^2 - 0.506929791528862*z - 1.69848173756478)",
      ((-1.5, 1.5), (-1.5, 1.5), (-1.0, 1.0)), 8, 64),
+    # Every term has x or y: the surface holds the z-axis, one sheet
+    # through it tangent to y = 0 there (crossing the split plane x = 0),
+    # another less than a cell above it in y > 0.  On the squares of x = 0
+    # between them F is zero on the axis side and negative beside it, so
+    # F + eps = 0 runs along that side; the boundary pairing joined its
+    # corners to the other sheet's trace instead, and the boxes in y > 0
+    # had polygons along the axis too (12 edges of 4 triangles;
+    # boxes/faces.py _zero_side_events).
+    ("s2-136 a sheet through a lattice line, another a cell away",
+     "-1/5*x^2*z^3 - 2/7*y*z^3 + 3/4*y^2*z^2 - 5/3*x^3*z + 5/2*y^2*z + 3/4*y^3", ((-1.0, 1.0),) * 3, 8, 64),
+    # Of the same class: the axes permuted (the line is the x-axis), and
+    # shifted to the lattice line x = 0.375, y = -0.1875 (15-digit
+    # coefficients; 12 and 4 edges of 4 triangles on main).
+    ("s2-136 permuted", "-1/5*x^3*y^2 - 2/7*x^3*z + 3/4*x^2*z^2 - 5/3*x*y^3 + 5/2*x*z^2 + 3/4*z^3",
+     ((-1.0, 1.0),) * 3, 8, 64),
+    ("s2-136 shifted",
+     "-1.66666666666667*x^3*z - 0.2*x^2*z^3 + 1.875*x^2*z + 0.15*x*z^3 - 0.703125*x*z + 0.75*y^3"
+     " + 0.75*y^2*z^2 + 2.5*y^2*z + 0.421875*y^2 - 0.285714285714286*y*z^3 + 0.28125*y*z^2 + 0.9375*y*z"
+     " + 0.0791015625*y - 0.0816964285714286*z^3 + 0.0263671875*z^2 + 0.17578125*z + 0.00494384765625",
+     ((-1.0, 1.0),) * 3, 8, 64),
 ]
 
 
