@@ -66,6 +66,10 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
         Polygons whose first vertex is a singular point (fanned from it).
     branches : dict
         Point index -> number of its star's cycles fanned into it.
+    splits : dict
+        (square, a, b) -> the nodes [(key, point), ...] put on the star
+        sectors' link a -> b (:func:`~singmesh.facets.fans.insert_link_nodes`;
+        the tube's strips, made later, read it: :func:`add_strips`).
     """
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
@@ -136,7 +140,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     offsets, keys, pts = insert_link_nodes(offsets, np.concatenate(parts_keys), np.concatenate(parts_pts),
                                            np.concatenate(parts_sq), splits)
     offsets, keys, pts = split_lattice_edges(offsets, keys, pts, events, tree.fine_level)
-    return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches
+    return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches, splits
 
 
 def _square_bounds_many(tree, squares: np.ndarray):
@@ -153,7 +157,7 @@ def _square_bounds_many(tree, squares: np.ndarray):
 
 
 def add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id: int, key0: int,
-               cell: float, box: np.ndarray, surface=None, traced=None):
+               cell: float, box: np.ndarray, surface=None, traced=None, splits: dict | None = None):
     """The polygons with the tube's strips (triangles from rails to the curve) appended.
 
     ``offsets, keys, pts, apex`` as from :func:`facet_polygons`; the strips
@@ -161,12 +165,25 @@ def add_strips(offsets, keys, pts, apex, grouped, links, events, curves, tube_id
     (``grouped``: :func:`singmesh.facets.cycles.box_links` with the tube as
     box ``tube_id``), the curve points keyed from ``key0`` on; ``surface`` as in
     :func:`~singmesh.facets.tubes.tube_triangles`, as is ``traced``.
+
+    ``splits`` (from :func:`facet_polygons`): a rail edge b -> a across a
+    star's sector link a -> b that got nodes gets them too (fuzz s2-2: a
+    cone's star next to the tube, a triangle's hole at the node).
     """
     tri_keys, tri_pts = tube_triangles(grouped, links, events, curves, tube_id, key0, cell, box, surface, traced)
     n = len(tri_keys)
-    offsets = np.concatenate([offsets, offsets[-1] + 3 * np.arange(1, n + 1)])
-    keys = np.concatenate([keys, tri_keys.ravel()])
-    pts = np.concatenate([pts, tri_pts.reshape(-1, 3)])
+    s_off = 3 * np.arange(n + 1)
+    s_keys, s_pts = tri_keys.ravel(), tri_pts.reshape(-1, 3)
+    if splits and n:
+        # The triangles have no squares: a rail edge b -> a reads the
+        # square of the sector's link a -> b.
+        square = {(b, a): q for q, a, b in splits}
+        nxt = np.arange(3 * n) + np.tile([1, 1, -2], n)
+        sq = np.array([square.get(ab, -1) for ab in zip(s_keys.tolist(), s_keys[nxt].tolist())], np.int64)
+        s_off, s_keys, s_pts = insert_link_nodes(s_off, s_keys, s_pts, sq, splits)
+    offsets = np.concatenate([offsets, offsets[-1] + s_off[1:]])
+    keys = np.concatenate([keys, s_keys])
+    pts = np.concatenate([pts, s_pts])
     apex = np.concatenate([apex, np.zeros(n, bool)])
     return offsets, keys, pts, apex
 

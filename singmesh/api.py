@@ -319,7 +319,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             break
         cubes = shrink_cubes(first, cubes, centres, few)
 
-    offsets, keys, pts, apex, branches = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id)
+    offsets, keys, pts, apex, branches, splits = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id)
     key0 = curve_key0(events)
     if len(curves.points):
         # The rails read the tube's squares on the box's faces paired by
@@ -330,7 +330,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         traced = None if r_links is links else (box_links(r_links, group), r_links)
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
                                               tube_id, key0, float(cell.max()), b,
-                                              surf if len(creases.points) else None, traced)
+                                              surf if len(creases.points) else None, traced, splits)
     fixed = np.arange(key0, key0 + len(curves.points))
     vertices, faces, vkeys, *grad = assemble(offsets, keys, pts, surf.gradient, project=surf.project,
                                              apex=apex, fixed_keys=fixed, return_gradient=improve)

@@ -366,6 +366,23 @@ REGRESSIONS = [
      " + 0.75*y^2*z^2 + 2.5*y^2*z + 0.421875*y^2 - 0.285714285714286*y*z^3 + 0.28125*y*z^2 + 0.9375*y*z"
      " + 0.0791015625*y - 0.0816964285714286*z^3 + 0.0263671875*z^2 + 0.17578125*z + 0.00494384765625",
      ((-1.0, 1.0),) * 3, 8, 64),
+    # A cone (3/5 x^2 = 9/4 y z, its apex a singular point) and another
+    # sheet crossing it along a curve that passes by the apex's star: the
+    # star's sector link on the star's face got a node (the sector's
+    # split), the tube's strip across that link, made later, did not (a
+    # triangle's hole, 3 open edges; facets/polygons.py add_strips).
+    ("s2-2 a tube's strip across a star's split link",
+     "(-9/4*y*z + 3/5*x^2)*(2.97841050879985*z^2 - 1.0286079054028*x*z - 2.61568249904869*x - 1.92117362349853)",
+     ((-2.0, 2.0), (-2.0, 2.0), (-1.5, 1.5)), 8, 64),
+    # Of the same class: the axes permuted, and the apex shifted to
+    # (0.25, -0.125, 0.09375) (15-digit coefficients; 3 open edges on main).
+    ("s2-2 permuted",
+     "(-2.25*x*y + 0.6*z^2)*(2.97841050879985*y^2 - 1.0286079054028*y*z - 2.61568249904869*z - 1.92117362349853)",
+     ((-2.0, 2.0), (-1.5, 1.5), (-2.0, 2.0)), 8, 64),
+    ("s2-2 shifted",
+     "(0.6*x^2 - 0.3*x - 2.25*y*z + 0.2109375*y - 0.28125*z + 0.0638671875)*(-1.0286079054028*x*z"
+     " - 2.51925050791718*x + 2.97841050879985*z^2 - 0.301299994049272*z - 1.26518356040674)",
+     ((-2.0, 2.0), (-2.0, 2.0), (-1.5, 1.5)), 8, 64),
 ]
 
 
