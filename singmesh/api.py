@@ -283,6 +283,11 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
     if len(points):
+        # A point on a face of the box has only the branches inside it there
+        # (one nappe of a cone whose axis crosses the face): no count to
+        # shrink its star for.
+        cut = topology.on_box_boundary(centres, b, tol.STAR_ON_BOX)
+        expected = [None if c else e for c, e in zip(cut.tolist(), expected)]
         # The stars grow along the adjacency of the leaves that failed the
         # simplicity test alone: this tree's events and links would be
         # replaced by the refined tree's.

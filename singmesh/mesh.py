@@ -12,6 +12,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
+from . import tolerances as tol
 from . import topology
 from .surface import Surface
 
@@ -381,7 +382,10 @@ class Mesh:
         """
         lost = [s for s in self.singularities
                 if s.vertex is None and (getattr(s.classification, "branches", None) or 0) > 0]
-        wrong = [s for s in self.singularities if s.vertex is not None
+        # On a face of the box only the branches inside it meet the point.
+        cut = topology.on_box_boundary(np.array([s.point for s in self.singularities], float).reshape(-1, 3),
+                                       self.box, tol.STAR_ON_BOX)
+        wrong = [s for s, c in zip(self.singularities, cut.tolist()) if s.vertex is not None and not c
                  and getattr(s.classification, "branches", None) not in (None, s.branches)]
         out = []
         if lost:

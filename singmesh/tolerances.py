@@ -904,3 +904,9 @@ CURVE_FLAT_NEWTON = 80
 #: curve of rank-2 points the Hessian keeps its size, at a cone's apex on
 #: it (fourth order) it falls as the square of the distance.
 CURVE_FLAT = 1e-6
+
+#: A singular point at most this far (fraction of the box) from a face of
+#: the box lies on it: only the branches inside the box meet it there, so
+#: the classifier's branch count is no target for its star (singmesh.api).
+#: The centred points of float input sit within rounding of the face.
+STAR_ON_BOX = 1e-12

@@ -13,11 +13,15 @@ import numpy as np
 from scipy import ndimage
 
 
-def branches_on_sphere(f, centre, radius, n_lat=720, n_lon=1440) -> int:
+def branches_on_sphere(f, centre, radius, n_lat=720, n_lon=1440, box=None) -> int:
     """Number of curves of F = 0 on the sphere |x - centre| = radius.
 
     ``f`` is a vectorised function of (..., 3) points.  A definite F (no
-    curve) gives 0.
+    curve) gives 0.  With ``box`` (three (lo, hi) pairs) only the part of
+    the sphere inside the box counts, the points outside left out of both
+    signs: for a centre on a face, edge or corner of the box that part is a
+    disc, and k arcs cut a disc into k + 1 regions as k curves cut the
+    sphere.
     """
     theta = (np.arange(n_lat) + 0.5) * np.pi / n_lat
     phi = np.arange(n_lon) * 2 * np.pi / n_lon
@@ -25,8 +29,12 @@ def branches_on_sphere(f, centre, radius, n_lat=720, n_lon=1440) -> int:
     pts = np.asarray(centre, float) + radius * np.stack(
         [np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
     sign = f(pts) > 0
+    inside = np.ones(sign.shape, bool)
+    if box is not None:
+        lim = np.asarray(box, float)
+        inside = ((pts >= lim[:, 0]) & (pts <= lim[:, 1])).all(axis=-1)
     regions = 0
-    for s in (sign, ~sign):
+    for s in (sign & inside, ~sign & inside):
         # Pad with the wrapped-around first column so labels join across 2 pi,
         # and with pole rows that join each pole's cap.
         grid = np.concatenate([s, s[:, :1]], axis=1)
