@@ -482,10 +482,11 @@ def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndar
     nothing is singular (:func:`_on_curve`): those stay starts.
     """
     from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
 
     if len(x) < 2:
         return x, False
-    labels = fcluster(linkage(x, method="single", metric="euclidean"), t=2.0 * cell, criterion="distance")
+    labels = fcluster(linkage(pdist(x), method="single"), t=2.0 * cell, criterion="distance")
     drop = np.zeros(len(x), bool)
     res = None
     for lab in np.unique(labels):
@@ -510,13 +511,15 @@ def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: 
     bounding box).
     """
     from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
 
     if len(x) <= 1:
         x = x.reshape(-1, 3)
         return (x, np.zeros(len(x))) if spans else x
-    # linkage takes the (n, 3) observations; a 3x3 array of points only
-    # looks like a distance matrix to it, hence the explicit metric.
-    labels = fcluster(linkage(x, method="single", metric="euclidean"), t=radius, criterion="distance")
+    # linkage gets the condensed distances: given 3 points as a 3x3 array
+    # that is symmetric with a zero diagonal ((0, a, a), (a, 0, a), (a, a, 0))
+    # it warns that they look like a distance matrix (same clusters either way).
+    labels = fcluster(linkage(pdist(x), method="single"), t=radius, criterion="distance")
     reps, extent = [], []
     for lab in np.unique(labels):
         sel = labels == lab

@@ -66,3 +66,17 @@ def test_node_on_a_box_edge_is_one_vertex_with_closed_fans():
     assert not boundary_edges_off_box(m.vertices, m.faces, box)
     f = lambda p: 36 * p[..., 0] ** 2 + 36 * p[..., 1] ** 2 - 48 * (p[..., 2] - 0.5) ** 2  # noqa: E731
     assert fans_at(m.faces, int(np.argmin(d))) == branches_on_sphere(f, apex, 0.05, 360, 720, box=box) == 2
+
+
+def test_three_symmetric_candidates_give_no_cluster_warning():
+    # (0, a, a), (a, 0, a), (a, a, 0) as a 3x3 array is symmetric with a
+    # zero diagonal: scipy's linkage warned that the points look like a
+    # distance matrix (seen by users of the Goursat quartic's octant).
+    from singmesh.skeleton.singular import _dedupe
+
+    a = 0.3
+    x = np.array([[0.0, a, a], [a, 0.0, a], [a, a, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reps = _dedupe(x, 0.1)
+    assert len(reps) == 3  # three points 0.42 apart: three clusters
