@@ -467,20 +467,31 @@ def _corner_events(surface: Surface, events: Events, squares, inc: dict, which: 
     a link of its own.  Where that gradient vanishes (a singular point of
     the face's curve), branches may leave the corner into the square.
     """
+    n, idx, g, rounding = _at_corners(surface, events, squares, inc, which)
+    out = np.zeros(len(inc["sq"]), bool)
+    tangential = (g > rounding) & (np.arange(3)[None, :] != n[idx, None])
+    out[idx] = tangential.any(axis=1)
+    return out
+
+
+def _at_corners(surface: Surface, events: Events, squares, inc: dict, which: np.ndarray):
+    """The incidences at a corner of their square (only on the squares ``which``).
+
+    Returns the squares' normal axes n (K,), the indices idx of those
+    incidences, |grad F| (len(idx), 3) at their events and its rounding
+    level per component.
+    """
     sq = inc["sq"]
     n, _, u0, v0, size = squares[sq].T
     at = (events.snapped[inc["ev"]] & which[sq]
           & ((inc["u"] == u0) | (inc["u"] == u0 + size)) & ((inc["v"] == v0) | (inc["v"] == v0 + size)))
-    out = np.zeros(len(sq), bool)
     idx = np.nonzero(at)[0]
-    if len(idx) == 0:
-        return out
     p = events.point[inc["ev"][idx]]
+    if len(idx) == 0:
+        return n, idx, np.zeros((0, 3)), np.zeros((0, 3))
     g = np.abs(surface.gradient(p))
     rounding = tol.ZERO_ULPS * np.finfo(float).eps * surface.gradient_magnitude(p)
-    tangential = (g > rounding) & (np.arange(3)[None, :] != n[idx, None])
-    out[idx] = tangential.any(axis=1)
-    return out
+    return n, idx, g, rounding
 
 
 def _zero_side_events(surface: Surface, events: Events, squares, inc: dict, which: np.ndarray) -> np.ndarray:
@@ -498,17 +509,10 @@ def _zero_side_events(surface: Surface, events: Events, squares, inc: dict, whic
     the boxes on the sheet's other side got polygons along the line: the
     lattice line's edges had four triangles.
     """
-    sq = inc["sq"]
-    n, _, u0, v0, size = squares[sq].T
-    at = (events.snapped[inc["ev"]] & which[sq]
-          & ((inc["u"] == u0) | (inc["u"] == u0 + size)) & ((inc["v"] == v0) | (inc["v"] == v0 + size)))
-    out = np.zeros((len(sq), 2), bool)
-    idx = np.nonzero(at)[0]
+    n, idx, g, rounding = _at_corners(surface, events, squares, inc, which)
+    out = np.zeros((len(inc["sq"]), 2), bool)
     if len(idx) == 0:
         return out
-    p = events.point[inc["ev"][idx]]
-    g = np.abs(surface.gradient(p))
-    rounding = tol.ZERO_ULPS * np.finfo(float).eps * surface.gradient_magnitude(p)
     rows = np.arange(len(idx))
     ua, va = (n[idx] + 1) % 3, (n[idx] + 2) % 3
     zu, zv = g[rows, ua] <= rounding[rows, ua], g[rows, va] <= rounding[rows, va]
