@@ -37,7 +37,8 @@ from .swing import Swing
 _KEPT: "weakref.WeakKeyDictionary[Surface, dict]" = weakref.WeakKeyDictionary()
 
 
-def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2)):
+def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2),
+                    near: tuple[np.ndarray, float] | None = None):
     """Boxes at ``level`` on which F and its partial derivatives along ``axes`` may all vanish.
 
     The surface's bounds on boxes decide (``Surface.enclose``, ``split``,
@@ -46,21 +47,30 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
     hundreds of nodes make many), so memory stays bounded and nothing is
     dropped.
 
+    Parameters
+    ----------
+    near : ((k, 3) ndarray, float), optional
+        Points and a radius: only boxes meeting the balls round them are
+        searched (a deeper look at a few places).  Such a search neither
+        uses up nor keeps the boxes a whole search goes on from.
+
     Returns
     -------
     lo, hi : (K, 3) ndarrays, the boxes' corners, sorted
     """
     # Enclosed even when a kept search goes on: the surface's tests may
     # depend on the root box (a polynomial's rounding dust).
+    box = np.asarray(box, dtype=float)
     root = surface.enclose(box)
     todo = [(root, np.zeros((1, 3), np.int64), 0)]
-    key = (np.asarray(box, dtype=float).tobytes(), tuple(axes))
+    key = (box.tobytes(), tuple(axes))
     kept = _KEPT.get(surface, {})
     if key in kept and kept[key][0] <= level:
         # The boxes an earlier, shallower search of the same surface and box
         # ended with (the curve search's): the deeper one goes on from them.
         todo = [(kept[key][1], kept[key][2], kept[key][0])]
-        del kept[key]
+        if near is None:
+            del kept[key]
     ends = []
     out = []
     offsets = CHILD_OFFSETS  # child c of a split box: Surface.split's order
@@ -68,6 +78,8 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
         d, corner, lvl = todo.pop()
         if len(corner):
             keep = surface.may_vanish(d, tuple(axes))
+            if near is not None:
+                keep &= _meets_balls(box, corner, lvl, *near)
             if not keep.all():
                 d, corner = d[keep], corner[keep]
         if len(corner) == 0:
@@ -83,11 +95,23 @@ def candidate_boxes(surface: Surface, box: np.ndarray, level: int, axes=(0, 1, 2
                          (2 * corner[sl, None, :] + offsets[None]).reshape(-1, 3), lvl + 1))
     if not out:
         return np.zeros((0, 3)), np.zeros((0, 3))
-    if sum(d.nbytes for d in ends) <= tol.CANDIDATE_KEEP_BYTES:
+    if near is None and sum(d.nbytes for d in ends) <= tol.CANDIDATE_KEEP_BYTES:
         _KEPT.setdefault(surface, {})[key] = (level, np.concatenate(ends), np.concatenate(out))
     corner = np.concatenate(out)
     corner = corner[np.lexsort(corner.T[::-1])]
     return _corners(box, corner, level)
+
+
+def _meets_balls(box: np.ndarray, corner: np.ndarray, level: int, centres: np.ndarray,
+                 radius: float) -> np.ndarray:
+    """Which boxes of ``level`` (integer corners) come within ``radius`` of a centre."""
+    from scipy.spatial import cKDTree
+
+    lo, hi = _corners(box, corner, level)
+    # The distance from the box's centre less its half diagonal: never more
+    # than the distance from the box.
+    d, _ = cKDTree(centres).query((lo + hi) / 2)
+    return d <= radius + 0.5 * float(np.linalg.norm(hi[0] - lo[0])) if len(lo) else np.zeros(0, bool)
 
 
 def _corners(box, corner, level):
@@ -189,7 +213,49 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
         at a point; those are not in ``points``.
     """
     box = np.asarray(box, dtype=float)
-    lo, hi = candidate_boxes(surface, box, level)
+    found, curve = _points_in(surface, box, *candidate_boxes(surface, box, level), avoid, avoid_radius)
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    for _ in range(tol.SINGULAR_CROWD_LEVELS):
+        # Points a cell or two apart (Labs' septic's neighbouring orbits
+        # near z = -0.56) share candidate boxes, and Newton from the box of
+        # one may end at its neighbour: the one between is lost.  Where
+        # points crowd, the search goes a level deeper.
+        at = np.array([sp.point for sp in found]).reshape(-1, 3)
+        cell = size / (1 << level)
+        crowded = _crowded(at, tol.SINGULAR_CROWD * cell)
+        if not crowded.any():
+            break
+        level += 1
+        lo, hi = candidate_boxes(surface, box, level, near=(at[crowded], tol.SINGULAR_CROWD * cell))
+        more, c = _points_in(surface, box, lo, hi, avoid, avoid_radius)
+        curve |= c
+        if more:
+            # Points both searches found are the first's.
+            new = np.array([sp.point for sp in more])
+            d, _ = _nearest(at, new)
+            found = sorted(found + [sp for sp, far in zip(more, (d > tol.SINGULAR_MERGE * size).tolist()) if far],
+                           key=lambda sp: tuple(sp.point))
+    return found, curve
+
+
+def _crowded(points: np.ndarray, distance: float) -> np.ndarray:
+    """Which points have another closer than ``distance``."""
+    if len(points) < 2:
+        return np.zeros(len(points), bool)
+    d, _ = _nearest(points, points, k=2)
+    return d[:, 1] < distance
+
+
+def _nearest(points: np.ndarray, queries: np.ndarray, k: int = 1):
+    """Distances to the nearest ``k`` of ``points`` (and their indices)."""
+    from scipy.spatial import cKDTree
+
+    return cKDTree(points).query(queries, k=k)
+
+
+def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+               avoid: np.ndarray | None, avoid_radius: float) -> tuple[list[SingularPoint], bool]:
+    """The singular points :func:`singular_points` finds from the candidate boxes ``lo``, ``hi``."""
     if avoid is not None and len(avoid) and len(lo):
         from scipy.spatial import cKDTree
 
