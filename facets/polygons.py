@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from singmesh import tolerances as tol
+from singmesh import topology
 from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 
@@ -88,6 +90,19 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
     star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
+    # A point on an edge of the box: the star's boundary holds it, and a
+    # cycle on the box's faces runs through it (a root event at the apex on
+    # the lattice line along the box edge).  Such a cycle is its own fan.
+    through, star_cycles = _through_apex(cycles, events, stars, points, star_cycles, tree.box)
+    for c, k in through:
+        i = stars[cycles.box[c]]
+        cyc = np.roll(ev[cycles.offsets[c]:cycles.offsets[c + 1]], -k)[1:]
+        parts_keys.append(np.concatenate([[point_key(i)], events.key[cyc]]))
+        parts_pts.append(np.concatenate([points[i].point[None], events.point[cyc]]))
+        parts_sq.append(np.full(len(cyc) + 1, -1, np.int64))
+        parts_sizes.append([len(cyc) + 1])
+        apex.append(np.ones(1, bool))
+        branches[i] = branches.get(i, 0) + 1
     # The face squares of all star cycles' links at once; the Hessian and
     # the skeleton directions once per point (a node has two cycles).
     spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
@@ -141,6 +156,31 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
                                            np.concatenate(parts_sq), splits)
     offsets, keys, pts = split_lattice_edges(offsets, keys, pts, events, tree.fine_level)
     return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches, splits
+
+
+def _through_apex(cycles, events, stars: dict, points: list, star_cycles: list, box: np.ndarray):
+    """The star cycles that run through their own singular point, and the others.
+
+    Returns
+    -------
+    through : list of (cycle, position of the event at the point in it)
+    rest : list of the other cycles of ``star_cycles``
+    """
+    through, rest = [], []
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    for c in star_cycles:
+        p = points[stars[cycles.box[c]]].point
+        if not topology.on_box_boundary(p[None], box, tol.STAR_ON_BOX)[0]:
+            rest.append(c)
+            continue
+        at = events.point[cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]]]
+        d = np.linalg.norm(at - p, axis=1)
+        k = int(np.argmin(d))
+        if d[k] <= tol.STAR_APEX_EVENT * size:
+            through.append((c, k))
+        else:
+            rest.append(c)
+    return through, rest
 
 
 def _square_bounds_many(tree, squares: np.ndarray):
