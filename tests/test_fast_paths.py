@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import singmesh
 from singmesh import tolerances as tol
 from singmesh.boxes import edges as edges_mod
 from singmesh.boxes import faces as faces_mod
@@ -782,3 +783,59 @@ def test_sector_polygons_of_many_cycles_are_each_alone(monkeypatch):
             assert all(a[0] == b[0] and np.array_equal(a[1], b[1])
                        for q in split for a, b in zip(split[q], split1[q]))
         assert got_next == key
+
+
+def test_column_dots_do_not_depend_on_the_batch():
+    # improve._dot: a column's dot product is the same alone (einsum takes
+    # n = 1 by another loop) as among others, so that values computed in
+    # one call can stand for those another call would compute.
+    from singmesh.facets.improve import _dot
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(3, 40)) * 10.0 ** rng.integers(-8, 8, size=(3, 40))
+    b = rng.normal(size=(3, 40)) * 10.0 ** rng.integers(-8, 8, size=(3, 40))
+    full = _dot(a, b)
+    for j in range(40):
+        # Contiguous columns, as the gathers give them (a strided view takes yet another loop).
+        for k in (1, 2):
+            one = _dot(np.ascontiguousarray(a[:, j:j + k]), np.ascontiguousarray(b[:, j:j + k]))
+            assert one.tobytes() == full[j:j + k].tobytes()
+
+
+@pytest.mark.parametrize("text, box", [
+    (float_rotated("4(x^2+y^2+z^2) + 16 x y z - 1", 3)[0], 1.5),    # nodes, float coefficients
+    (float_rotated("x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 11.8", 4)[0], 3.0),
+])
+def test_kept_leans_are_the_leans_of_the_triangles_as_they_are(text, box, monkeypatch):
+    # The shaping pass keeps each triangle's lean from the step or flip
+    # that computed it (improve._State.lean): after every step and every
+    # flip pass, each kept lean must be, to the bit, the lean of that
+    # triangle computed afresh from its corners' places and normals.
+    from singmesh.facets import improve
+
+    checked = []
+
+    def check(state):
+        t = np.flatnonzero(state.has_lean)
+        ft = state.f[t]
+        p = [np.take(state.p, ft[:, i], axis=1) for i in range(3)]
+        ref = sum(np.take(state.n, ft[:, i], axis=1) for i in range(3))
+        assert state.lean[t].tobytes() == improve._lean(*p, ref).tobytes()
+        checked.append(len(t))
+
+    relax, flip = improve._State.relax, improve._State.flip_pass
+
+    def relax_checked(self, surface):
+        out = relax(self, surface)
+        check(self)
+        return out
+
+    def flip_checked(self, dirty):
+        out = flip(self, dirty)
+        check(self)
+        return out
+
+    monkeypatch.setattr(improve._State, "relax", relax_checked)
+    monkeypatch.setattr(improve._State, "flip_pass", flip_checked)
+    m = singmesh.mesh(text, box=((-box, box),) * 3, coarse=16, fine=64)
+    assert m.stats["improve"]["moves"] > 0 and max(checked) > 100
