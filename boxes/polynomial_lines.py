@@ -120,7 +120,7 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         comp = np.zeros((len(sel), d, d))
         comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
         comp[:, :, -1] = -c[:, :d]
-        eig = np.linalg.eigvals(comp)
+        eig = _eigvals_of_distinct(comp, c[:, :d])
         near = (np.abs(eig.imag) <= tol.ROOT_IMAG) & (np.abs(eig.real) <= bound)
         r, k = np.nonzero(near)
         rows.append(sel[r])
@@ -159,6 +159,45 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         if len(active) == 0:
             break
     return row, root
+
+
+def _eigvals_of_distinct(matrices: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """``np.linalg.eigvals(matrices)``, each distinct matrix solved once.
+
+    ``key`` (N, k) tells the matrices apart: equal rows, bit for bit, are
+    equal matrices.  The lines of a surface symmetric in a coordinate plane
+    (x -> -x: Barth's sextic, the tanglecube, Cayley's cubic, any even
+    term structure in a centred box) carry the same polynomial in pairs or
+    eights: LAPACK solves each matrix alone, so the copies get the bits of
+    the first (and the result is real exactly where it was).  Copies are
+    found by a hash of the rows' bits, sorted: on a surface without them
+    (rotated) that costs a sort of N integers, 0.2% of the eigenvalues.
+    """
+    n = len(key)
+    if n < 2:
+        return np.linalg.eigvals(matrices)
+    bits = np.ascontiguousarray(key).view(np.int64).reshape(n, -1)
+    h = bits[:, 0] * _HASH[0]
+    for j in range(1, bits.shape[1]):
+        h ^= bits[:, j] * _HASH[j % len(_HASH)]  # (products wrap: a hash)
+    if not (np.diff(np.sort(h)) == 0).any():
+        return np.linalg.eigvals(matrices)
+    order = np.argsort(h, kind="stable")
+    s = bits[order]
+    # A row is a copy of the one before it in this order when the two
+    # have the same hash and the same bits (then of the whole run's first).
+    copy = (h[order][1:] == h[order][:-1]) & (s[1:] == s[:-1]).all(axis=1)
+    new = np.concatenate([[True], ~copy])
+    inverse = np.empty(n, np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return np.linalg.eigvals(matrices[order[new]])[inverse]
+
+
+#: Odd 64-bit multipliers (splitmix64's and xxhash's constants) for the
+#: hash of :func:`_eigvals_of_distinct`.
+_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, 0x85EBCA77C2B2AE63,
+                  0x27D4EB2F165667C5, 0x94D049BB133111EB, 0xBF58476D1CE4E5B9, 0xFF51AFD7ED558CCD],
+                 dtype=np.uint64).view(np.int64)
 
 
 def _far_from_zero(poly: np.ndarray) -> np.ndarray:

@@ -839,3 +839,59 @@ def test_kept_leans_are_the_leans_of_the_triangles_as_they_are(text, box, monkey
     monkeypatch.setattr(improve._State, "flip_pass", flip_checked)
     m = singmesh.mesh(text, box=((-box, box),) * 3, coarse=16, fine=64)
     assert m.stats["improve"]["moves"] > 0 and max(checked) > 100
+
+
+def test_eigenvalues_of_distinct_matrices_are_those_of_all():
+    # polynomial_lines._eigvals_of_distinct: each distinct companion matrix
+    # solved once, its copies given its values, is np.linalg.eigvals of the
+    # whole stack bit for bit: copies in any order, rows differing in one
+    # bit or in the sign of a zero kept apart, all-real stacks real.
+    from singmesh.boxes.polynomial_lines import _eigvals_of_distinct
+
+    rng = np.random.default_rng(8)
+
+    def stack(c):
+        d = c.shape[1]
+        comp = np.zeros((len(c), d, d))
+        comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
+        comp[:, :, -1] = -c
+        return comp
+
+    base = rng.normal(size=(300, 4)) * 10.0 ** rng.integers(-6, 6, size=(300, 4))
+    near = base[:20].copy()
+    near[:, 0] = np.nextafter(near[:, 0], np.inf)        # one bit off
+    signed = np.zeros((2, 4))
+    signed[1, 2] = -0.0                                   # -0 beside +0
+    c = np.concatenate([base, base[rng.integers(0, 300, 500)], near, signed, -base[:50]])
+    c = c[rng.permutation(len(c))]
+    got = _eigvals_of_distinct(stack(c), c)
+    want = np.linalg.eigvals(stack(c))
+    assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
+    # Quadratics with real roots only: the result is real, as eigvals's.
+    q = np.array([[-1.0, 0.0], [-0.25, 0.0], [-1.0, 0.0], [-4.0, 1.5]])
+    got, want = _eigvals_of_distinct(stack(q), q), np.linalg.eigvals(stack(q))
+    assert got.dtype == want.dtype == np.float64 and got.tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("text, box", [
+    ("4*(((1+sqrt(5))/2)**2*x**2-y**2)*(((1+sqrt(5))/2)**2*y**2-z**2)*(((1+sqrt(5))/2)**2*z**2-x**2)"
+     "-(1+2*((1+sqrt(5))/2))*(x**2+y**2+z**2-1)**2", 2.0),      # Barth: lines equal in eights
+    ("x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 11.8", 3.0),
+    (float_rotated("4(x^2+y^2+z^2) + 16 x y z - 1", 3)[0], 1.5),  # no two lines alike
+])
+def test_line_roots_of_symmetric_surfaces_solve_each_polynomial_once(text, box, monkeypatch):
+    # compute_events's line roots with each distinct line polynomial solved
+    # once are those with every line solved, bit for bit; on the symmetric
+    # surfaces fewer matrices go to LAPACK.
+    surface = Surface.parse(text)
+    tree = subdivide(surface, np.array([[-box, box]] * 3), 3, 5)
+    sizes, plain = [], np.linalg.eigvals
+    monkeypatch.setattr(polynomial_lines.np.linalg, "eigvals", lambda a: sizes.append(len(a)) or plain(a))
+    got = compute_events(surface, tree)
+    solved = sum(sizes)
+    sizes.clear()
+    monkeypatch.setattr(polynomial_lines, "_eigvals_of_distinct", lambda m, k: np.linalg.eigvals(m))
+    want = compute_events(surface, tree)
+    assert got.key.tobytes() == want.key.tobytes() and got.pos.tobytes() == want.pos.tobytes()
+    if "sqrt" in text or "11.8" in text:
+        assert solved < 0.6 * sum(sizes)
