@@ -143,10 +143,15 @@ def column_products(w: np.ndarray, q: np.ndarray) -> np.ndarray:
     so that every product has one shape whatever the number of columns.
     """
     k = q.shape[1]
-    full = k - k % _COLUMNS
+    blocks = k // _COLUMNS
+    full = blocks * _COLUMNS
     out = np.empty((w.shape[0], k))
-    for c in range(0, full, _COLUMNS):
-        np.matmul(w, q[:, c:c + _COLUMNS], out=out[:, c:c + _COLUMNS])
+    if blocks:
+        # All full blocks in one stacked product: numpy calls BLAS once per
+        # block, with the shapes and strides of a product per block (the
+        # same bits), without a Python step per block.
+        np.matmul(w, q[:, :full].reshape(q.shape[0], blocks, _COLUMNS).transpose(1, 0, 2),
+                  out=out[:, :full].reshape(w.shape[0], blocks, _COLUMNS).transpose(1, 0, 2))
     if full < k:
         last = np.zeros((q.shape[0], _COLUMNS))
         last[:, :k - full] = q[:, full:]

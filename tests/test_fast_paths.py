@@ -895,3 +895,25 @@ def test_line_roots_of_symmetric_surfaces_solve_each_polynomial_once(text, box, 
     assert got.key.tobytes() == want.key.tobytes() and got.pos.tobytes() == want.pos.tobytes()
     if "sqrt" in text or "11.8" in text:
         assert solved < 0.6 * sum(sizes)
+
+
+def test_column_products_in_one_stacked_product_are_the_blocks_one_by_one():
+    # monomials.column_products: the full blocks of columns go to BLAS in
+    # one stacked matmul; each block must have the bits of its own product
+    # (the loop it replaces), whatever the number of columns.
+    from singmesh.monomials import _COLUMNS, column_products
+
+    rng = np.random.default_rng(12)
+    for rows, inner in [(5, 25), (7, 49), (10, 25), (1, 9)]:
+        w = rng.normal(size=(rows, inner)) * 10.0 ** rng.integers(-6, 6, size=(rows, inner))
+        for k in [1, 7, _COLUMNS - 1, _COLUMNS, _COLUMNS + 1, 3 * _COLUMNS, 5 * _COLUMNS + 17]:
+            q = rng.normal(size=(inner, k)) * 10.0 ** rng.integers(-3, 3, size=(inner, 1))
+            want = np.empty((rows, k))
+            full = k - k % _COLUMNS
+            for c in range(0, full, _COLUMNS):
+                np.matmul(w, q[:, c:c + _COLUMNS], out=want[:, c:c + _COLUMNS])
+            if full < k:
+                last = np.zeros((inner, _COLUMNS))
+                last[:, :k - full] = q[:, full:]
+                want[:, full:] = (w @ last)[:, :k - full]
+            assert column_products(w, q).tobytes() == want.tobytes()
