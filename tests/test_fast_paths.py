@@ -19,7 +19,7 @@ from singmesh.boxes import edges as edges_mod
 from singmesh.boxes import faces as faces_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
-from singmesh.boxes.octree import KeptRows, subdivide
+from singmesh.boxes.octree import KeptRows, StackedRows, subdivide
 from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
@@ -917,3 +917,30 @@ def test_column_products_in_one_stacked_product_are_the_blocks_one_by_one():
                 last[:, :k - full] = q[:, full:]
                 want[:, full:] = (w @ last)[:, :k - full]
             assert column_products(w, q).tobytes() == want.tobytes()
+
+
+def test_stacked_rows_read_as_the_concatenation(tree_of):
+    """A subdivision's data (the levels' stacks, not concatenated) reads as their copy, and a
+    refined tree's kept rows of it too; out-of-range rows are refused as numpy refuses them."""
+    surface, tree = tree_of
+    whole = np.asarray(tree.data)
+    rng = np.random.default_rng(4)
+    cuts = np.sort(rng.choice(np.arange(1, len(whole)), size=3, replace=False))
+    stacked = StackedRows(np.split(whole, cuts))
+    assert len(stacked) == len(whole) and stacked.shape == whole.shape and stacked.nbytes == whole.nbytes
+    rows = rng.choice(len(whole), size=50)
+    rows[:3] = [0, len(whole) - 1, -2]
+    mask = rng.random(len(whole)) < 0.3
+    for index in [rows, list(rows), mask, (rows, slice(None), 0), (mask, -1), slice(3, 9), 4]:
+        assert np.array_equal(stacked[index], whole[index])
+    side = rng.integers(0, 2, len(rows))
+    for n in range(3):
+        assert np.array_equal(surface.face_modes(stacked, n, side, rows=rows), surface.face_modes(whole, n, side, rows=rows))
+    for bad in ([len(whole)], [-len(whole) - 1]):
+        with pytest.raises(IndexError):
+            stacked[np.array(bad)]
+    keep = rng.random(len(whole)) < 0.6
+    kept = KeptRows(StackedRows(np.split(whole, cuts)), keep, [whole[:4]])
+    want = np.concatenate([whole[keep], whole[:4]])
+    assert np.array_equal(kept[rows % len(want)], want[rows % len(want)]) and np.array_equal(np.asarray(kept), want)
+    assert np.array_equal(np.asarray(stacked), whole)
