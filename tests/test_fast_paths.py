@@ -944,3 +944,27 @@ def test_stacked_rows_read_as_the_concatenation(tree_of):
     want = np.concatenate([whole[keep], whole[:4]])
     assert np.array_equal(kept[rows % len(want)], want[rows % len(want)]) and np.array_equal(np.asarray(kept), want)
     assert np.array_equal(np.asarray(stacked), whole)
+
+
+def test_is_zero_reads_the_term_sizes_only_at_small_values(monkeypatch):
+    # PolynomialSurface.is_zero on many points: the sum of |terms| only
+    # where |F| is under its bound, by the contraction whose bits do not
+    # depend on the other points: the answer of the sum read at all points.
+    import singmesh.surface as surface_mod
+    from singmesh.monomials import evaluate_tensors_many
+
+    read = []
+    monkeypatch.setattr(surface_mod, "evaluate_tensors_many",
+                        lambda t, p: read.append(len(p)) or evaluate_tensors_many(t, p))
+    eps = surface_mod.ZERO_ULPS * np.finfo(float).eps
+    for text in ["4(x^2+y^2+z^2) + 16 x y z - 1", "x^2 - y^2 z", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]]:
+        s = Surface.parse(text)
+        lattice = np.stack(np.meshgrid(*[np.linspace(-2, 2, 33)] * 3, indexing="ij"), -1).reshape(-1, 3)
+        on = s.project(lattice[::7] * 0.5)
+        for pts in [lattice, np.concatenate([lattice[::5], on]), on]:
+            read.clear()
+            got = s.is_zero(pts)
+            want = np.abs(s(pts)) <= eps * s.magnitude(pts)
+            assert np.array_equal(got, want)
+            assert sum(read) <= len(pts) and (pts is not lattice or sum(read) < len(pts) // 2)
+    assert max(read) > 0
