@@ -288,7 +288,7 @@ def test_line_roots_without_root_free_lines_are_all_roots(monkeypatch):
     tree = subdivide(surface, BOX, 3, 5)
     cap = []
     real = polynomial_lines.real_roots
-    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b: cap.append(p) or real(p, b))
+    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b, **kw: cap.append(p) or real(p, b, **kw))
     compute_events(surface, tree)
     monkeypatch.setattr(polynomial_lines, "real_roots", real)
     polys += cap
@@ -890,7 +890,7 @@ def test_line_roots_of_symmetric_surfaces_solve_each_polynomial_once(text, box, 
     got = compute_events(surface, tree)
     solved = sum(sizes)
     sizes.clear()
-    monkeypatch.setattr(polynomial_lines, "_eigvals_of_distinct", lambda m, k: np.linalg.eigvals(m))
+    monkeypatch.setattr(polynomial_lines, "_distinct_rows", lambda k: None)  # every line solved
     want = compute_events(surface, tree)
     assert got.key.tobytes() == want.key.tobytes() and got.pos.tobytes() == want.pos.tobytes()
     if "sqrt" in text or "11.8" in text:
@@ -968,3 +968,35 @@ def test_is_zero_reads_the_term_sizes_only_at_small_values(monkeypatch):
             assert np.array_equal(got, want)
             assert sum(read) <= len(pts) and (pts is not lattice or sum(read) < len(pts) // 2)
     assert max(read) > 0
+
+
+def test_real_roots_of_equal_rows_are_each_rows_own():
+    # polynomial_lines.real_roots solves each distinct row once (bit for
+    # bit equal rows, in any order among the others) and gives every copy
+    # its roots in the order of the rows: the rows, roots and order of
+    # solving every row, on random polynomials with copies, rows equal up
+    # to a factor (negated), and rows of other degrees.
+    rng = np.random.default_rng(9)
+    base = _line_polynomials(rng, 400)
+    low = base.copy()
+    low[:60, -2:] = 0.0                                   # lower effective degree
+    rows = np.concatenate([base, base[rng.integers(0, 400, 300)], -base[:40], low[:60], low[:30]])
+    rows = rows[rng.permutation(len(rows))]
+    got = polynomial_lines.real_roots(rows, 1.0)
+    want = polynomial_lines._real_roots(rows, 1.0, repeats=False)
+    assert len(got[0]) > 200
+    assert np.array_equal(got[0], want[0]) and got[1].tobytes() == want[1].tobytes()
+    assert polynomial_lines._distinct_rows(rows) is not None and polynomial_lines._distinct_rows(base) is None
+
+
+def test_mirror_symmetry_of_line_polynomials():
+    # polynomial_lines._mirrored: the lines across ``axis`` come in mirror
+    # pairs exactly when F is even or odd in one or both coordinates across.
+    from singmesh.boxes.polynomial_lines import _mirrored
+
+    cases = {"x^2 + y^2 - z^2 + 0.3 x y z": [True, True, True],       # (y, z) -> (-y, -z) ...
+             "x^3 + y^2 z + 0.5": [True, False, True],                  # even in y: lines along x and z
+             float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]: [False, False, False]}
+    for text, want in cases.items():
+        s = Surface.parse(text)
+        assert [_mirrored(s.coeffs, a) for a in range(3)] == want, text
