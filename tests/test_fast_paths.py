@@ -1000,3 +1000,26 @@ def test_mirror_symmetry_of_line_polynomials():
     for text, want in cases.items():
         s = Surface.parse(text)
         assert [_mirrored(s.coeffs, a) for a in range(3)] == want, text
+
+
+def test_events_on_segments_in_chunks_are_those_in_one_go(tree_of, monkeypatch):
+    # Events.on_segments takes many segments in chunks (temporaries the
+    # allocator reuses): each segment's events do not depend on the others,
+    # so the chunks' results in order are those of one pass, whatever the
+    # chunk size, on the contact squares' edges as face_links gives them.
+    surface, tree = tree_of
+    events = compute_events(surface, tree)
+    squares, _, _ = faces_mod.contact_squares(tree)
+    n, plane, u0, v0, size = squares.T
+    e_axis = np.stack([(n + 1) % 3, (n + 2) % 3, (n + 1) % 3, (n + 2) % 3], 1).ravel()
+    e_f1 = np.stack([v0, plane, v0 + size, plane], 1).ravel()
+    e_f2 = np.stack([plane, u0 + size, plane, u0], 1).ravel()
+    e_start = np.stack([u0, v0, u0, v0], 1).ravel()
+    e_end = e_start + np.repeat(size, 4)
+    monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", 1 << 40)
+    want = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
+    assert len(want[0]) > 0
+    for chunk in (1, 7, 100, len(e_axis) - 1):
+        monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", chunk)
+        got = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
