@@ -22,7 +22,10 @@ Four tables:
    functions ``api.py`` calls, wrapped for the run), with the shaping pass's
    share (issue #12 wants it at most 10%).
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_speed.py [--repeat 5] [--only cmp,coarse,nodes,stages]
+5. (``--only profile``) cProfile of ``--repeat`` Barth meshes, the top 15
+   functions by own time (CPU clock).
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_speed.py [--repeat 5] [--only cmp,coarse,nodes,stages,profile]
 
 This is a benchmark that prints figures, not a test.  On a shared machine
 the CPU time (``time.process_time``) is the steadier figure.
@@ -176,11 +179,34 @@ def by_stage(repeat: int) -> None:
             setattr(api, name, fn)
 
 
+def profile(repeat: int, top: int = 15) -> None:
+    """cProfile (CPU clock) of ``repeat`` Barth meshes after a warm-up: the ``top`` functions by own time."""
+    import cProfile
+    import io
+    import pstats
+
+    name, text, box, _ = SURFACES[-1]
+    singmesh.mesh(text, box)
+    prof = cProfile.Profile(time.process_time)
+    prof.enable()
+    for _ in range(repeat):
+        singmesh.mesh(text, box)
+    prof.disable()
+    out = io.StringIO()
+    pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(top)
+    print(f"\n5. cProfile of {repeat} {name} meshes (CPU clock; the profiler's overhead inflates the "
+          f"Python-heavy parts), top {top} by own time")
+    lines = out.getvalue().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.lstrip().startswith("ncalls"))
+    print("\n".join([line for line in lines[:start] if "function calls" in line] + lines[start:start + top + 1]))
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeat", type=int, default=5, help="timed runs per figure (medians; default 5)")
     p.add_argument("--res", type=int, default=64, help="marching cubes cells per axis (default 64)")
-    p.add_argument("--only", default="cmp,coarse,nodes,stages", help="tables to print: cmp, coarse, nodes, stages")
+    p.add_argument("--only", default="cmp,coarse,nodes,stages",
+                   help="tables to print: cmp, coarse, nodes, stages, profile (cProfile of Barth)")
     args = p.parse_args(argv)
     only = set(args.only.split(","))
     print(f"singmesh | numpy {np.__version__} | tables: {sorted(only)}")
@@ -192,6 +218,8 @@ def main(argv=None) -> int:
         by_nodes(args.repeat)
     if "stages" in only:
         by_stage(args.repeat)
+    if "profile" in only:
+        profile(args.repeat)
     return 0
 
 

@@ -34,7 +34,7 @@ def line_roots(coeffs: np.ndarray, axis: int, fixed: np.ndarray, s0: np.ndarray,
     poly = line_polynomials(coeffs, axis, fixed)
     # Work in tau in [-1, 1] over the segment.
     centre, half = (s0 + s1) / 2, (s1 - s0) / 2
-    row, root = real_roots(_rescale(poly, centre, half), 1.0)
+    row, root = real_roots(_rescale(poly, centre, half), 1.0, repeats=_mirrored(coeffs, axis))
     return row, centre[row] + half[row] * root
 
 
@@ -86,25 +86,78 @@ def _horner(coeffs: np.ndarray, t: np.ndarray):
     return p, dp
 
 
-def real_roots(tau_poly: np.ndarray, bound: float):
+def _mirrored(coeffs: np.ndarray, axis: int) -> bool:
+    """Whether F (monomial tensor) is even or odd under a change of sign of one or both of
+    the coordinates across ``axis``: then the lines at (u, v) and their mirror images
+    carry the same polynomial up to sign (:func:`real_roots` looks for copies)."""
+    ua, va = (axis + 1) % 3, (axis + 2) % 3
+    t = np.moveaxis(coeffs, (axis, ua, va), (0, 1, 2))
+    su = (-1.0) ** np.arange(t.shape[1])[None, :, None]
+    sv = (-1.0) ** np.arange(t.shape[2])[None, None, :]
+    for sign in (su, sv, su * sv):
+        flipped = t * sign
+        if np.array_equal(flipped, t) or np.array_equal(flipped, -t):
+            return True
+    return False
+
+
+def real_roots(tau_poly: np.ndarray, bound: float, repeats: bool = True):
     """Real roots in [-bound, bound] of stacked polynomials in tau.
 
     Roots are found as companion-matrix eigenvalues (all of them, so none
     is missed between sign samples), kept when nearly real, and polished by
-    Newton's method.
+    Newton's method.  Equal rows (bit for bit: the lines of a surface
+    symmetric in a coordinate plane, in pairs to eights) are solved once:
+    every step is a function of the row alone (LAPACK solves each matrix
+    alone, Newton's steps are elementwise), so each copy gets the bits its
+    own solve would give, in the order of the rows.
+
+    ``repeats``: look for equal rows (False: none are expected, as on the
+    lines of a surface without mirror symmetry across them, and the search,
+    a sort of the rows' hashes, is skipped).
 
     Returns
     -------
     row : (R,) int64, root : (R,) float64
+        By effective degree, then row, each row's roots in the order of its
+        eigenvalues.
     """
+    distinct = _distinct_rows(tau_poly) if repeats else None
+    if distinct is None:
+        return _real_roots(tau_poly, bound, repeats)
+    first, inverse = distinct
+    row_d, root_d = _real_roots(tau_poly[first], bound, repeats)
+    # Each distinct row's roots are consecutive: where they start.
+    count = np.bincount(row_d, minlength=len(first))
+    start = np.zeros(len(first), np.int64)
+    if len(row_d):
+        run = np.concatenate([[True], row_d[1:] != row_d[:-1]])
+        start[row_d[run]] = np.flatnonzero(run)
+    # The rows with roots, by degree then row (_real_roots's order).
+    each = count[inverse]
+    order = np.argsort(_degrees(tau_poly[first])[inverse], kind="stable")
+    order = order[each[order] > 0]
+    n = each[order]
+    row = np.repeat(order, n)
+    at = np.repeat(start[inverse[order]] - (np.cumsum(n) - n), n) + np.arange(int(n.sum()))
+    return row, root_d[at]
+
+
+def _degrees(tau_poly: np.ndarray) -> np.ndarray:
+    """Effective degree of each row: leading coefficients under 1e-13 of the
+    largest dropped (the roots they would add lie far outside [-1, 1])."""
+    scale = np.abs(tau_poly).max(axis=1)
+    significant = np.abs(tau_poly) > 1e-13 * scale[:, None]
+    return np.where(significant.any(axis=1),
+                    tau_poly.shape[1] - 1 - np.argmax(significant[:, ::-1], axis=1), 0)
+
+
+def _real_roots(tau_poly: np.ndarray, bound: float, repeats: bool = True):
+    """:func:`real_roots` of every row (``repeats``: look for matrices equal up to a factor)."""
     rows, roots = [], []
     scale = np.abs(tau_poly).max(axis=1)
     nonzero = scale > 0
-    # Effective degree: drop leading coefficients negligible on [-1, 1];
-    # the roots they would add lie far outside the interval.
-    significant = np.abs(tau_poly) > 1e-13 * scale[:, None]
-    degree = np.where(significant.any(axis=1),
-                      tau_poly.shape[1] - 1 - np.argmax(significant[:, ::-1], axis=1), 0)
+    degree = _degrees(tau_poly)
     for d in np.unique(degree[nonzero]):
         if d < 1:
             continue
@@ -120,7 +173,7 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         comp = np.zeros((len(sel), d, d))
         comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
         comp[:, :, -1] = -c[:, :d]
-        eig = np.linalg.eigvals(comp)
+        eig = _eigvals_of_distinct(comp, c[:, :d]) if repeats else np.linalg.eigvals(comp)
         near = (np.abs(eig.imag) <= tol.ROOT_IMAG) & (np.abs(eig.real) <= bound)
         r, k = np.nonzero(near)
         rows.append(sel[r])
@@ -159,6 +212,57 @@ def real_roots(tau_poly: np.ndarray, bound: float):
         if len(active) == 0:
             break
     return row, root
+
+
+def _distinct_rows(key: np.ndarray):
+    """(first, inverse) of the distinct rows of ``key`` (N, k), bit for bit: ``key[first]``
+    the distinct rows, ``key[first][inverse]`` is ``key``; None when all rows differ.
+
+    Rows are told apart by a hash of their bits, sorted (on rows without
+    copies that costs a sort of N integers); a row is a copy of the one
+    before it in that order when both hashes and bits are equal.
+    """
+    n = len(key)
+    if n < 2:
+        return None
+    bits = np.ascontiguousarray(key).view(np.int64).reshape(n, -1)
+    if bits.shape[1] == 0:
+        return None
+    h = bits[:, 0] * _HASH[0]
+    for j in range(1, bits.shape[1]):
+        h ^= bits[:, j] * _HASH[j % len(_HASH)]  # (products wrap: a hash)
+    if not (np.diff(np.sort(h)) == 0).any():
+        return None
+    order = np.argsort(h, kind="stable")
+    s = bits[order]
+    copy = (h[order][1:] == h[order][:-1]) & (s[1:] == s[:-1]).all(axis=1)
+    new = np.concatenate([[True], ~copy])
+    inverse = np.empty(n, np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return order[new], inverse
+
+
+def _eigvals_of_distinct(matrices: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """``np.linalg.eigvals(matrices)``, each distinct matrix solved once.
+
+    ``key`` (N, k) tells the matrices apart: equal rows, bit for bit, are
+    equal matrices (:func:`_distinct_rows`).  LAPACK solves each matrix
+    alone, so the copies get the bits of the first (and the result is real
+    exactly where it was).  :func:`real_roots` solves equal polynomials
+    once already; this finds the polynomials equal up to a factor.
+    """
+    distinct = _distinct_rows(key)
+    if distinct is None:
+        return np.linalg.eigvals(matrices)
+    first, inverse = distinct
+    return np.linalg.eigvals(matrices[first])[inverse]
+
+
+#: Odd 64-bit multipliers (splitmix64's and xxhash's constants) for the
+#: hash of :func:`_eigvals_of_distinct`.
+_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, 0x85EBCA77C2B2AE63,
+                  0x27D4EB2F165667C5, 0x94D049BB133111EB, 0xBF58476D1CE4E5B9, 0xFF51AFD7ED558CCD],
+                 dtype=np.uint64).view(np.int64)
 
 
 def _far_from_zero(poly: np.ndarray) -> np.ndarray:

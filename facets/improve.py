@@ -120,7 +120,15 @@ def _cross(a, b):
 
 
 def _dot(a, b):
-    """Dot products of the columns of (3, n) arrays."""
+    """Dot products of the columns of (3, n) arrays.
+
+    Each column's value does not depend on the others (nor on n): einsum
+    takes a single column (n = 1) by another loop, rounded otherwise, so
+    one column goes as two.  The relaxation keeps values computed in one
+    call for use in another (the triangles' leans).
+    """
+    if a.shape[1] == 1:
+        return np.einsum("ij,ij->j", np.repeat(a, 2, axis=1), np.repeat(b, 2, axis=1))[:1]
     return np.einsum("ij,ij->j", a, b)
 
 
@@ -207,6 +215,13 @@ class _State:
         self.extra = np.zeros(0, np.int64)
         self._roles(self.keys // nv, self.keys % nv, length, gnorm)
         self._faces()
+        #: Per triangle, its lean (:func:`_lean`, corners in ``f``'s order,
+        #: against the sum of their normals) where ``has_lean``: kept from
+        #: the step or flip that last computed it (the triangle and its
+        #: corners' places and normals unchanged since), so that a step
+        #: need not compute the lean before its moves again.
+        self.lean = np.zeros(len(f))
+        self.has_lean = np.zeros(len(f), bool)
 
     # ------------------------------------------------------------ roles
     def _roles(self, a, b, counts, gnorm):
@@ -327,6 +342,8 @@ class _State:
         ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
         if not ok.any():
             return 0, np.zeros(0, np.int64)
+        # The leans of the new triangles (corners as they are stored below).
+        lean_t1, lean_t2 = lean[0][ok], lean[1][ok]
         h, h2, a, b, c, d, new, t1, t2 = (x[ok] for x in (h, h2, a, b, c, d, new, t1, t2))
         gain = old[ok] - cos_new[ok]
         # An independent set: each triangle goes to its best flip; a flip is
@@ -346,6 +363,8 @@ class _State:
         mark[t2] = True
         dirty = np.flatnonzero(mark)
         h, h2, a, b, c, d, new, t1, t2 = (x[take] for x in (h, h2, a, b, c, d, new, t1, t2))
+        self.lean[t1], self.lean[t2] = lean_t1[take], lean_t2[take]
+        self.has_lean[t1] = self.has_lean[t2] = True
         # New triangles t1 = (a, d, c), t2 = (b, c, d); the old half-edges
         # b->c, c->a, a->d, d->b move to their places in them.
         n1, p1, n2, p2 = self.next[h], self.prev[h], self.next[h2], self.prev[h2]
@@ -472,9 +491,16 @@ class _State:
         moved[idx] = True
         touched = sub[_any_corner(moved, fs)]
         ft = f[touched]
-        old = [np.take(P, ft[:, i], axis=1) for i in range(3)]
-        ref = sum(np.take(N, ft[:, i], axis=1) for i in range(3))
-        bound = np.minimum(_lean(*old, ref), tol.IMPROVE_LEAN)
+        # The leans before the moves: kept from earlier steps and flips
+        # where known (the same values), computed for the others.
+        before = self.lean[touched]
+        unknown = np.flatnonzero(~self.has_lean[touched])
+        if len(unknown):
+            fu = ft[unknown]
+            old = [np.take(P, fu[:, i], axis=1) for i in range(3)]
+            ref = sum(np.take(N, fu[:, i], axis=1) for i in range(3))
+            before[unknown] = _lean(*old, ref)
+        bound = np.minimum(before, tol.IMPROVE_LEAN)
         old_p, old_n = P[:, idx], N[:, idx]
         P[:, idx], N[:, idx] = q, new_normal
         undone = 0
@@ -493,17 +519,21 @@ class _State:
             ref = sum(np.take(N, fr[:, i], axis=1) for i in range(3))
             lean[redo] = _lean(*now, ref)
             back = ft[(lean < bound) | (lean <= 0)].ravel()
-            back = np.unique(back[moved[back]])
+            back = back[moved[back]]
             if len(back) == 0:
                 break
+            # Distinct and sorted, as np.unique gives them, without a sort.
+            was = np.zeros(nv, bool)
+            was[back] = True
+            back = np.flatnonzero(was)
             k = np.searchsorted(idx, back)
             P[:, back], N[:, back] = old_p[:, k], old_n[:, k]
             moved[back] = False
             undone += len(back)
-            was = np.zeros(nv, bool)
-            was[back] = True
             redo = np.flatnonzero(_any_corner(was, ft))
         self._faces(touched)  # the triangles at the vertices that moved (and may be back)
+        self.lean[touched] = lean  # each as it is now (recomputed after every move back)
+        self.has_lean[touched] = True
         # A vertex whose move was undone (by Newton's checks or a fold)
         # tries half the step next round: a whole step towards the centroid
         # can fold a neighbour where a shorter one is fine (Kummer: a 8.7

@@ -36,7 +36,7 @@ from singmesh.boxes.bernstein import split as bernstein_split
 from singmesh.skeleton.splitting import compose, translate_many
 
 from .errors import SurfaceError
-from .monomials import differentiate, evaluate_tensor, evaluate_tensors, powers
+from .monomials import _MANY, differentiate, evaluate_tensor, evaluate_tensors, evaluate_tensors_many, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation, unused_message  # noqa: F401  (X, Y, Z re-exported)
 from .tolerances import CANDIDATE_DUST, DISPLAY_DIGITS, MAX_DEGREE, MAX_POWER, ZERO_ULPS
 
@@ -568,9 +568,17 @@ class PolynomialSurface(Surface):
         a = np.abs(p)
         reach = np.maximum(np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2]), 1.0)
         bound = 2.0 * float(np.abs(self.coeffs).sum()) * reach ** self.degree
-        if not (np.abs(v) <= eps * bound).any():
+        small = np.abs(v) <= eps * bound
+        if not small.any():
             return np.zeros(v.shape, bool)
-        return np.abs(v) <= eps * self.magnitude(p)
+        if v.size <= _MANY:
+            return np.abs(v) <= eps * self.magnitude(p)
+        # Only where |F| is under the bound can it be under eps * sum |terms|
+        # (at most the bound): the sum of |terms| is read there alone, by the
+        # many-points contraction whose bits do not depend on the other points.
+        out = np.zeros(v.shape, bool)
+        out[small] = np.abs(v[small]) <= eps * evaluate_tensors_many([np.abs(self.coeffs)], np.abs(p[small]))[0]
+        return out
 
     def magnitude(self, points) -> np.ndarray:
         """Sum of |terms| of F at ``points``: the scale of F's rounding error."""

@@ -13,12 +13,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import singmesh
 from singmesh import tolerances as tol
 from singmesh.boxes import edges as edges_mod
 from singmesh.boxes import faces as faces_mod
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links
-from singmesh.boxes.octree import KeptRows, subdivide
+from singmesh.boxes.octree import KeptRows, StackedRows, subdivide
 from singmesh.boxes import polynomial_lines
 from singmesh.facets.assemble import _last_max
 from singmesh.facets.flips import area_and_longest
@@ -287,7 +288,7 @@ def test_line_roots_without_root_free_lines_are_all_roots(monkeypatch):
     tree = subdivide(surface, BOX, 3, 5)
     cap = []
     real = polynomial_lines.real_roots
-    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b: cap.append(p) or real(p, b))
+    monkeypatch.setattr(polynomial_lines, "real_roots", lambda p, b, **kw: cap.append(p) or real(p, b, **kw))
     compute_events(surface, tree)
     monkeypatch.setattr(polynomial_lines, "real_roots", real)
     polys += cap
@@ -782,3 +783,243 @@ def test_sector_polygons_of_many_cycles_are_each_alone(monkeypatch):
             assert all(a[0] == b[0] and np.array_equal(a[1], b[1])
                        for q in split for a, b in zip(split[q], split1[q]))
         assert got_next == key
+
+
+def test_column_dots_do_not_depend_on_the_batch():
+    # improve._dot: a column's dot product is the same alone (einsum takes
+    # n = 1 by another loop) as among others, so that values computed in
+    # one call can stand for those another call would compute.
+    from singmesh.facets.improve import _dot
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(3, 40)) * 10.0 ** rng.integers(-8, 8, size=(3, 40))
+    b = rng.normal(size=(3, 40)) * 10.0 ** rng.integers(-8, 8, size=(3, 40))
+    full = _dot(a, b)
+    for j in range(40):
+        # Contiguous columns, as the gathers give them (a strided view takes yet another loop).
+        for k in (1, 2):
+            one = _dot(np.ascontiguousarray(a[:, j:j + k]), np.ascontiguousarray(b[:, j:j + k]))
+            assert one.tobytes() == full[j:j + k].tobytes()
+
+
+@pytest.mark.parametrize("text, box", [
+    (float_rotated("4(x^2+y^2+z^2) + 16 x y z - 1", 3)[0], 1.5),    # nodes, float coefficients
+    (float_rotated("x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 11.8", 4)[0], 3.0),
+])
+def test_kept_leans_are_the_leans_of_the_triangles_as_they_are(text, box, monkeypatch):
+    # The shaping pass keeps each triangle's lean from the step or flip
+    # that computed it (improve._State.lean): after every step and every
+    # flip pass, each kept lean must be, to the bit, the lean of that
+    # triangle computed afresh from its corners' places and normals.
+    from singmesh.facets import improve
+
+    checked = []
+
+    def check(state):
+        t = np.flatnonzero(state.has_lean)
+        ft = state.f[t]
+        p = [np.take(state.p, ft[:, i], axis=1) for i in range(3)]
+        ref = sum(np.take(state.n, ft[:, i], axis=1) for i in range(3))
+        assert state.lean[t].tobytes() == improve._lean(*p, ref).tobytes()
+        checked.append(len(t))
+
+    relax, flip = improve._State.relax, improve._State.flip_pass
+
+    def relax_checked(self, surface):
+        out = relax(self, surface)
+        check(self)
+        return out
+
+    def flip_checked(self, dirty):
+        out = flip(self, dirty)
+        check(self)
+        return out
+
+    monkeypatch.setattr(improve._State, "relax", relax_checked)
+    monkeypatch.setattr(improve._State, "flip_pass", flip_checked)
+    m = singmesh.mesh(text, box=((-box, box),) * 3, coarse=16, fine=64)
+    assert m.stats["improve"]["moves"] > 0 and max(checked) > 100
+
+
+def test_eigenvalues_of_distinct_matrices_are_those_of_all():
+    # polynomial_lines._eigvals_of_distinct: each distinct companion matrix
+    # solved once, its copies given its values, is np.linalg.eigvals of the
+    # whole stack bit for bit: copies in any order, rows differing in one
+    # bit or in the sign of a zero kept apart, all-real stacks real.
+    from singmesh.boxes.polynomial_lines import _eigvals_of_distinct
+
+    rng = np.random.default_rng(8)
+
+    def stack(c):
+        d = c.shape[1]
+        comp = np.zeros((len(c), d, d))
+        comp[:, np.arange(1, d), np.arange(d - 1)] = 1.0
+        comp[:, :, -1] = -c
+        return comp
+
+    base = rng.normal(size=(300, 4)) * 10.0 ** rng.integers(-6, 6, size=(300, 4))
+    near = base[:20].copy()
+    near[:, 0] = np.nextafter(near[:, 0], np.inf)        # one bit off
+    signed = np.zeros((2, 4))
+    signed[1, 2] = -0.0                                   # -0 beside +0
+    c = np.concatenate([base, base[rng.integers(0, 300, 500)], near, signed, -base[:50]])
+    c = c[rng.permutation(len(c))]
+    got = _eigvals_of_distinct(stack(c), c)
+    want = np.linalg.eigvals(stack(c))
+    assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
+    # Quadratics with real roots only: the result is real, as eigvals's.
+    q = np.array([[-1.0, 0.0], [-0.25, 0.0], [-1.0, 0.0], [-4.0, 1.5]])
+    got, want = _eigvals_of_distinct(stack(q), q), np.linalg.eigvals(stack(q))
+    assert got.dtype == want.dtype == np.float64 and got.tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("text, box", [
+    ("4*(((1+sqrt(5))/2)**2*x**2-y**2)*(((1+sqrt(5))/2)**2*y**2-z**2)*(((1+sqrt(5))/2)**2*z**2-x**2)"
+     "-(1+2*((1+sqrt(5))/2))*(x**2+y**2+z**2-1)**2", 2.0),      # Barth: lines equal in eights
+    ("x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 11.8", 3.0),
+    (float_rotated("4(x^2+y^2+z^2) + 16 x y z - 1", 3)[0], 1.5),  # no two lines alike
+])
+def test_line_roots_of_symmetric_surfaces_solve_each_polynomial_once(text, box, monkeypatch):
+    # compute_events's line roots with each distinct line polynomial solved
+    # once are those with every line solved, bit for bit; on the symmetric
+    # surfaces fewer matrices go to LAPACK.
+    surface = Surface.parse(text)
+    tree = subdivide(surface, np.array([[-box, box]] * 3), 3, 5)
+    sizes, plain = [], np.linalg.eigvals
+    monkeypatch.setattr(polynomial_lines.np.linalg, "eigvals", lambda a: sizes.append(len(a)) or plain(a))
+    got = compute_events(surface, tree)
+    solved = sum(sizes)
+    sizes.clear()
+    monkeypatch.setattr(polynomial_lines, "_distinct_rows", lambda k: None)  # every line solved
+    want = compute_events(surface, tree)
+    assert got.key.tobytes() == want.key.tobytes() and got.pos.tobytes() == want.pos.tobytes()
+    if "sqrt" in text or "11.8" in text:
+        assert solved < 0.6 * sum(sizes)
+
+
+def test_column_products_in_one_stacked_product_are_the_blocks_one_by_one():
+    # monomials.column_products: the full blocks of columns go to BLAS in
+    # one stacked matmul; each block must have the bits of its own product
+    # (the loop it replaces), whatever the number of columns.
+    from singmesh.monomials import _COLUMNS, column_products
+
+    rng = np.random.default_rng(12)
+    for rows, inner in [(5, 25), (7, 49), (10, 25), (1, 9)]:
+        w = rng.normal(size=(rows, inner)) * 10.0 ** rng.integers(-6, 6, size=(rows, inner))
+        for k in [1, 7, _COLUMNS - 1, _COLUMNS, _COLUMNS + 1, 3 * _COLUMNS, 5 * _COLUMNS + 17]:
+            q = rng.normal(size=(inner, k)) * 10.0 ** rng.integers(-3, 3, size=(inner, 1))
+            want = np.empty((rows, k))
+            full = k - k % _COLUMNS
+            for c in range(0, full, _COLUMNS):
+                np.matmul(w, q[:, c:c + _COLUMNS], out=want[:, c:c + _COLUMNS])
+            if full < k:
+                last = np.zeros((inner, _COLUMNS))
+                last[:, :k - full] = q[:, full:]
+                want[:, full:] = (w @ last)[:, :k - full]
+            assert column_products(w, q).tobytes() == want.tobytes()
+
+
+def test_stacked_rows_read_as_the_concatenation(tree_of):
+    """A subdivision's data (the levels' stacks, not concatenated) reads as their copy, and a
+    refined tree's kept rows of it too; out-of-range rows are refused as numpy refuses them."""
+    surface, tree = tree_of
+    whole = np.asarray(tree.data)
+    rng = np.random.default_rng(4)
+    cuts = np.sort(rng.choice(np.arange(1, len(whole)), size=3, replace=False))
+    stacked = StackedRows(np.split(whole, cuts))
+    assert len(stacked) == len(whole) and stacked.shape == whole.shape and stacked.nbytes == whole.nbytes
+    rows = rng.choice(len(whole), size=50)
+    rows[:3] = [0, len(whole) - 1, -2]
+    mask = rng.random(len(whole)) < 0.3
+    for index in [rows, list(rows), mask, (rows, slice(None), 0), (mask, -1), slice(3, 9), 4]:
+        assert np.array_equal(stacked[index], whole[index])
+    side = rng.integers(0, 2, len(rows))
+    for n in range(3):
+        assert np.array_equal(surface.face_modes(stacked, n, side, rows=rows), surface.face_modes(whole, n, side, rows=rows))
+    for bad in ([len(whole)], [-len(whole) - 1]):
+        with pytest.raises(IndexError):
+            stacked[np.array(bad)]
+    keep = rng.random(len(whole)) < 0.6
+    kept = KeptRows(StackedRows(np.split(whole, cuts)), keep, [whole[:4]])
+    want = np.concatenate([whole[keep], whole[:4]])
+    assert np.array_equal(kept[rows % len(want)], want[rows % len(want)]) and np.array_equal(np.asarray(kept), want)
+    assert np.array_equal(np.asarray(stacked), whole)
+
+
+def test_is_zero_reads_the_term_sizes_only_at_small_values(monkeypatch):
+    # PolynomialSurface.is_zero on many points: the sum of |terms| only
+    # where |F| is under its bound, by the contraction whose bits do not
+    # depend on the other points: the answer of the sum read at all points.
+    import singmesh.surface as surface_mod
+    from singmesh.monomials import evaluate_tensors_many
+
+    read = []
+    monkeypatch.setattr(surface_mod, "evaluate_tensors_many",
+                        lambda t, p: read.append(len(p)) or evaluate_tensors_many(t, p))
+    eps = surface_mod.ZERO_ULPS * np.finfo(float).eps
+    for text in ["4(x^2+y^2+z^2) + 16 x y z - 1", "x^2 - y^2 z", float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]]:
+        s = Surface.parse(text)
+        lattice = np.stack(np.meshgrid(*[np.linspace(-2, 2, 33)] * 3, indexing="ij"), -1).reshape(-1, 3)
+        on = s.project(lattice[::7] * 0.5)
+        for pts in [lattice, np.concatenate([lattice[::5], on]), on]:
+            read.clear()
+            got = s.is_zero(pts)
+            want = np.abs(s(pts)) <= eps * s.magnitude(pts)
+            assert np.array_equal(got, want)
+            assert sum(read) <= len(pts) and (pts is not lattice or sum(read) < len(pts) // 2)
+    assert max(read) > 0
+
+
+def test_real_roots_of_equal_rows_are_each_rows_own():
+    # polynomial_lines.real_roots solves each distinct row once (bit for
+    # bit equal rows, in any order among the others) and gives every copy
+    # its roots in the order of the rows: the rows, roots and order of
+    # solving every row, on random polynomials with copies, rows equal up
+    # to a factor (negated), and rows of other degrees.
+    rng = np.random.default_rng(9)
+    base = _line_polynomials(rng, 400)
+    low = base.copy()
+    low[:60, -2:] = 0.0                                   # lower effective degree
+    rows = np.concatenate([base, base[rng.integers(0, 400, 300)], -base[:40], low[:60], low[:30]])
+    rows = rows[rng.permutation(len(rows))]
+    got = polynomial_lines.real_roots(rows, 1.0)
+    want = polynomial_lines._real_roots(rows, 1.0, repeats=False)
+    assert len(got[0]) > 200
+    assert np.array_equal(got[0], want[0]) and got[1].tobytes() == want[1].tobytes()
+    assert polynomial_lines._distinct_rows(rows) is not None and polynomial_lines._distinct_rows(base) is None
+
+
+def test_mirror_symmetry_of_line_polynomials():
+    # polynomial_lines._mirrored: the lines across ``axis`` come in mirror
+    # pairs exactly when F is even or odd in one or both coordinates across.
+    from singmesh.boxes.polynomial_lines import _mirrored
+
+    cases = {"x^2 + y^2 - z^2 + 0.3 x y z": [True, True, True],       # (y, z) -> (-y, -z) ...
+             "x^3 + y^2 z + 0.5": [True, False, True],                  # even in y: lines along x and z
+             float_rotated("x^2 + y^2 - z^2 + 0.3 x y z", 7)[0]: [False, False, False]}
+    for text, want in cases.items():
+        s = Surface.parse(text)
+        assert [_mirrored(s.coeffs, a) for a in range(3)] == want, text
+
+
+def test_events_on_segments_in_chunks_are_those_in_one_go(tree_of, monkeypatch):
+    # Events.on_segments takes many segments in chunks (temporaries the
+    # allocator reuses): each segment's events do not depend on the others,
+    # so the chunks' results in order are those of one pass, whatever the
+    # chunk size, on the contact squares' edges as face_links gives them.
+    surface, tree = tree_of
+    events = compute_events(surface, tree)
+    squares, _, _ = faces_mod.contact_squares(tree)
+    n, plane, u0, v0, size = squares.T
+    e_axis = np.stack([(n + 1) % 3, (n + 2) % 3, (n + 1) % 3, (n + 2) % 3], 1).ravel()
+    e_f1 = np.stack([v0, plane, v0 + size, plane], 1).ravel()
+    e_f2 = np.stack([plane, u0 + size, plane, u0], 1).ravel()
+    e_start = np.stack([u0, v0, u0, v0], 1).ravel()
+    e_end = e_start + np.repeat(size, 4)
+    monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", 1 << 40)
+    want = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
+    assert len(want[0]) > 0
+    for chunk in (1, 7, 100, len(e_axis) - 1):
+        monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", chunk)
+        got = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
