@@ -682,6 +682,15 @@ CREASE_TIE = 1e-12
 #: is divided by Newton (as CURVE_TRACE_STEP for singular curves).
 CREASE_TRACE_STEP = 4
 
+#: A crease trace takes up to this many steps at once (predicted along
+#: its tangent, Newton on all in one call, then checked in order as single
+#: steps): from CREASE_AHEAD_MIN after a single step, doubling while all
+#: are kept.  Each call of F's graph costs as much for one point as for
+#: dozens; along a straight crease every step is kept, along a curved one
+#: those within a step of the tangent's prediction.
+CREASE_AHEAD_MIN = 4
+CREASE_AHEAD_MAX = 32
+
 #: Newton iterations onto a crease (min-norm steps on two equations, or
 #: Gauss-Newton on the stacked equations at a corner).
 CREASE_NEWTON = 30
