@@ -756,6 +756,20 @@ CREASE_WELD = 1e-6
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
 
+#: Coarsening of crease meshes (facets/coarsen.py): a vertex goes where
+#: its triangles stay in their planes to this fraction of the box's size
+#: (flat faces and straight creases, float-rotated: rounding is ~1e-16;
+#: the sagitta of a chord of a cell on a curved crease is ~1e-5), ...
+COARSEN_FLAT = 1e-10
+#: ... and no new triangle has an angle below this many degrees (or below
+#: the smallest of the triangles it replaces), ...
+COARSEN_ANGLE = 10.0
+#: ... nor an edge longer than this many coarse cells (the largest
+#: triangles of the coarse lattice elsewhere: a cell's face diagonal).
+COARSEN_EDGE = 1.4142135623730951
+#: ... trying the shortest this many edges of each vertex.
+COARSEN_TRIES = 2
+
 #: Curvature (singmesh.curvature): grad F is zero at a point, and the
 #: curvature undefined (NaN), when |grad F| is below this fraction of the
 #: size of the terms summed for its components: ZERO_ULPS ulps, the

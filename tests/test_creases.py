@@ -176,14 +176,27 @@ def _edges(T):
 
 
 def _crease_edges(V, T, pairs, size, cells):
-    """Mesh edges with both ends on a crease (to 1e-10 of the box) and at most 4 fine cells long
-    (consecutive crease vertices, not a chord across a flat piece): edges, triangle counts, lengths."""
-    on = _on_crease(V, pairs, 1e-10 * size)
+    """Mesh edges along a crease: both ends and the midpoint on one crease (to 1e-10 of the box), or
+    both ends on a crease and at most 4 fine cells long (a chord of a curved crease, whose midpoint
+    is a sagitta off it); not a chord across a flat piece between two creases.  On flat faces the
+    edges along a straight crease are as long as the coarse lattice's (merged fine triangles).
+    Returns the edges, their triangle counts and lengths."""
     edges, cnt = _edges(T)
+    tol = 1e-10 * size
+    on = _on_crease(V, pairs, tol)
     sel = on[edges[:, 0]] & on[edges[:, 1]]
-    length = np.linalg.norm(V[edges[sel, 0]] - V[edges[sel, 1]], axis=1)
-    near = length <= 4 * size / cells
-    return edges[sel][near], cnt[sel][near], length[near]
+    e = edges[sel]
+    length = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    mid = 0.5 * (V[e[:, 0]] + V[e[:, 1]])
+    along = np.zeros(len(e), bool)
+    for a, b in pairs:
+        fa, fb = _numpy(_expr(a)), _numpy(_expr(b))
+        ok = np.ones(len(e), bool)
+        for q in (V[e[:, 0]], V[e[:, 1]], mid):
+            ok &= (np.abs(fa(q)) < tol) & (np.abs(fb(q)) < tol)
+        along |= ok
+    keep = along | (length <= 4 * size / cells)
+    return e[keep], cnt[sel][keep], length[keep]
 
 
 def _mesh(name):
@@ -769,3 +782,53 @@ def test_crease_tracing_takes_many_steps_per_pass_over_f():
     # Trace steps: CREASE_TRACE_STEP cells each, along the 12 edges of length 1.4.
     steps = 12 * 1.4 / (singmesh.tolerances.CREASE_TRACE_STEP * cell)
     assert passes[0] <= 4 * steps, (passes[0], steps)
+
+
+def test_straight_creases_have_triangles_of_the_mesh_size():
+    # Along a crease the tube is meshed on the fine lattice: a cube had 57k triangles at the
+    # defaults, 44k of them within 12 fine cells of an edge, where its faces elsewhere have
+    # triangles of the coarse lattice.  On flat faces and straight creases the fine triangles are
+    # now merged (vertices removed, the rest kept in place).  Float-rotated cube, coarse 16, fine 128:
+    # triangles within 12 fine cells of the edges (counted from the faces) at most 4 times what
+    # triangles of the coarse cell's size would take there; closed, chi 2, vertices on F = 0,
+    # crease samples from Newton on the two faces' equations on mesh edges, no angle below 5 (the
+    # merging makes none below 10 degrees or below the smallest it replaces).
+    rot = _rotation(3)
+    u, v, w = (_lin(row) for row in rot)
+    eq = f"Max(Abs({u}), Abs({v}), Abs({w})) - 0.7"
+    box = np.array([[-1.3, 1.3]] * 3)
+    m = singmesh.mesh(eq, box=box, coarse=16, fine=128)
+    V, T = m.vertices, m.faces
+    edges, cnt = _edges(T)
+    assert np.all(cnt == 2)
+    assert len(V) - len(edges) + len(T) == 2
+    assert np.abs(np.abs(V @ rot.T).max(axis=1) - 0.7).max() <= 1e-10
+    fine_cell, coarse_cell = 2.6 / m.stats["fine"], 2.6 / 16
+    corners = np.array([[a, b, c] for a in (-0.7, 0.7) for b in (-0.7, 0.7) for c in (-0.7, 0.7)])
+    ends = [(p, q) for i, p in enumerate(corners) for q in corners[i + 1:] if np.sum(p != q) == 1]
+    a = np.linalg.solve(rot, np.array([e[0] for e in ends]).T).T
+    b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
+    band = 12 * fine_cell
+    near = _segment_distance(V[T].mean(axis=1), a, b) <= band
+    # Two faces meet at each edge: a band 2 * band wide on each, 1.4 long, 12 edges.
+    allowed = 4 * (12 * 1.4 * 2 * band) / (coarse_cell ** 2 / 2)
+    assert near.sum() <= allowed, (near.sum(), allowed)
+    # Crease samples: Newton (one min-norm step: the equations are linear) on the two faces
+    # u_i = +-0.7, u_j = +-0.7 from points off the edge; each lies on a mesh edge.
+    rng = np.random.default_rng(5)
+    samples = []
+    for (p, q), pa, pb in zip(ends, a, b):
+        i, j = np.nonzero(p == q)[0]
+        g = rot[[i, j]]
+        x = pa + rng.uniform(0.02, 0.98, (20, 1)) * (pb - pa) + rng.normal(scale=0.01, size=(20, 3))
+        r = x @ g.T - np.array([p[i], p[j]])
+        samples.append(x - r @ np.linalg.pinv(g).T)
+    samples = np.concatenate(samples)
+    assert _segment_distance(samples, V[edges[:, 0]], V[edges[:, 1]]).max() <= 1e-9
+    P = V[T]
+    ang = []
+    for k in range(3):
+        e1, e2 = P[:, (k + 1) % 3] - P[:, k], P[:, (k + 2) % 3] - P[:, k]
+        ang.append(np.degrees(np.arccos(np.clip((e1 * e2).sum(1) / np.linalg.norm(e1, axis=1)
+                                                / np.linalg.norm(e2, axis=1), -1, 1))))
+    assert np.min(ang) >= 5.0
