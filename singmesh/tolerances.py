@@ -103,6 +103,11 @@ ROOT_FREE_ROUNDING = 1e-12
 NEWTON_ITERATIONS = 8
 NEWTON_STEP = 1e-15
 
+#: Sign samples between roots of a lattice line are asked whether F is
+#: zero to rounding there (Surface.is_zero) only where |F| is below this
+#: fraction of the largest sample: rounding noise is far below it.
+SIGN_ZERO_PREFILTER = 1e-9
+
 #: Roots on one line closer than this (relative to the line's length) are
 #: one cluster: a multiple root such as an edge tangency.
 ROOT_CLUSTER = 1e-7
