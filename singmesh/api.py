@@ -21,6 +21,7 @@ from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, poi
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
+from singmesh.facets.coarsen import coarsen_crease_mesh
 from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
@@ -346,6 +347,14 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
                             surf.gradient, surf.hessian)
     if specks.any():
         vertices, faces, vkeys, *grad = without_faces(vertices, faces, specks, vkeys, *grad)
+    if len(creases.points) and len(faces):
+        # The fine triangles of the crease tubes, on flat faces and along
+        # straight creases, merged up to the size of the coarse lattice's.
+        coarse_cell = float(np.max(b[:, 1] - b[:, 0])) / (1 << coarse_level)
+        vertices, faces, vkeys, grad, curves = coarsen_crease_mesh(
+            vertices, faces, vkeys, grad, curves, key0, point_key(np.arange(len(points))), b,
+            tol.COARSEN_EDGE * coarse_cell)
+        fixed = np.arange(key0, key0 + len(curves.points))
     t_improve = time.perf_counter()
     improved = {}
     if improve:

@@ -1002,6 +1002,22 @@ class _Kink(CreaseSystem):
         return keep
 
 
+def kink_values(systems: list, points) -> tuple[np.ndarray, np.ndarray] | None:
+    """G1, G2 and their gradients of several kinks at the points, in one pass over F's graph.
+
+    Returns (n, k, 2) and (n, k, 2, 3) for the k kinks of ``systems``, or
+    None where they are not all kinks of one :class:`ElementarySurface`
+    (then each is asked on its own).  One pass costs about what one
+    kink's values cost: the kinks share F's graph.
+    """
+    if not systems or not all(isinstance(s, _Kink) and s._s is systems[0]._s for s in systems):
+        return None
+    p = np.asarray(points, float).reshape(-1, 3)
+    v = point_eval(systems[0]._s._graph, [n for s in systems for n in s._nodes], p)
+    v = np.stack(v, 1).reshape(len(p), len(systems), 8)
+    return v[:, :, :2], v[:, :, 2:].reshape(len(p), len(systems), 2, 3)
+
+
 class _Tip(TipSystem):
     """A root of a sum of squares in an :class:`ElementarySurface`: its equations as nodes of the graph."""
 

@@ -103,6 +103,11 @@ ROOT_FREE_ROUNDING = 1e-12
 NEWTON_ITERATIONS = 8
 NEWTON_STEP = 1e-15
 
+#: Sign samples between roots of a lattice line are asked whether F is
+#: zero to rounding there (Surface.is_zero) only where |F| is below this
+#: fraction of the largest sample: rounding noise is far below it.
+SIGN_ZERO_PREFILTER = 1e-9
+
 #: Roots on one line closer than this (relative to the line's length) are
 #: one cluster: a multiple root such as an edge tangency.
 ROOT_CLUSTER = 1e-7
@@ -692,6 +697,15 @@ CREASE_TIE = 1e-12
 #: is divided by Newton (as CURVE_TRACE_STEP for singular curves).
 CREASE_TRACE_STEP = 4
 
+#: A crease trace takes up to this many steps at once (predicted along
+#: its tangent, Newton on all in one call, then checked in order as single
+#: steps): from CREASE_AHEAD_MIN after a single step, doubling while all
+#: are kept.  Each call of F's graph costs as much for one point as for
+#: dozens; along a straight crease every step is kept, along a curved one
+#: those within a step of the tangent's prediction.
+CREASE_AHEAD_MIN = 4
+CREASE_AHEAD_MAX = 32
+
 #: Newton iterations onto a crease (min-norm steps on two equations, or
 #: Gauss-Newton on the stacked equations at a corner).
 CREASE_NEWTON = 30
@@ -756,6 +770,20 @@ CREASE_WELD = 1e-6
 #: joined along the surface's trace on the box face (twice the tubes'
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
+
+#: Coarsening of crease meshes (facets/coarsen.py): a vertex goes where
+#: its triangles stay in their planes to this fraction of the box's size
+#: (flat faces and straight creases, float-rotated: rounding is ~1e-16;
+#: the sagitta of a chord of a cell on a curved crease is ~1e-5), ...
+COARSEN_FLAT = 1e-10
+#: ... and no new triangle has an angle below this many degrees (or below
+#: the smallest of the triangles it replaces), ...
+COARSEN_ANGLE = 10.0
+#: ... nor an edge longer than this many coarse cells (the largest
+#: triangles of the coarse lattice elsewhere: a cell's face diagonal).
+COARSEN_EDGE = 1.4142135623730951
+#: ... trying the shortest this many edges of each vertex.
+COARSEN_TRIES = 2
 
 #: Curvature (singmesh.curvature): grad F is zero at a point, and the
 #: curvature undefined (NaN), when |grad F| is below this fraction of the

@@ -36,6 +36,7 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
+from singmesh.elementary import kink_values
 from singmesh.surface import CreaseSystem, Surface, boxes_where
 
 from .singular_curves import CurveSet, SingularCurve, SpecialPoint, _point_polyline_distance, back_at_start
@@ -134,10 +135,11 @@ def _crossing(systems: list, si: int, x: np.ndarray, y: np.ndarray, h: float, ne
     x = 0 and y = 0 cross, or a cube's corner).
     """
     d = float(np.linalg.norm(y - x))
+    both = kink_values(systems, y[None])  # every kink's values at y in one pass (None: one by one)
     for sj, other in enumerate(systems):
         if sj == si or (near is not None and not near(sj, y)):
             continue
-        v, g = other.values(y[None])
+        v, g = (both[0][:, sj], both[1][:, sj]) if both is not None else other.values(y[None])
         if not np.all(np.abs(v[0]) <= 2.0 * h * np.linalg.norm(g[0], axis=1)):
             continue
         z = _corner(systems, [si, sj], y, h)
@@ -195,55 +197,126 @@ def _trace_one_way(system: CreaseSystem, box: np.ndarray, x0: np.ndarray, t0: np
     """
     pts = [x0]
     t = t0
-    for n in range(max_steps):
+    multi = systems is not None and len(systems) > 1
+    n, ahead = 0, tol.CREASE_AHEAD_MIN
+    while n < max_steps:
         x = pts[-1]
-        y = None
-        for scale in (1.0, 0.5, 0.25):
-            z, ok = _newton(system, (x + scale * h * t)[None], scale * h)
-            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
-                y = z[0]
-                break
-        if y is None:
-            # Newton fails past a point where another crease meets this one.
-            z = _crossing(systems, si, x, x + h * t, h, near) if systems is not None and len(systems) > 1 else None
-            if z is not None:
-                if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
-                    pts[-1] = z  # x was Newton's landing next to (or on) the corner
-                else:
+        # Several steps at once (predicted along the tangent, Newton on all
+        # of them in one call), checked in order below as single steps
+        # are; where the first of them fails, the single step with its
+        # shorter tries.
+        ys, ts = _steps_ahead(system, x, t, h, min(ahead, max_steps - n)) if ahead > 1 else (None, None)
+        if ys is None or not len(ys):
+            ahead = 1
+            ys, ts, how = _one_step(system, box, pts, t, h, systems, si, near)
+            if how is not None:
+                return pts[1:], how, None
+        inside = np.all((ys >= box[:, 0]) & (ys <= box[:, 1]), axis=1)
+        cand = _crossing_candidates(systems, si, ys, h, near) if multi else np.zeros(len(ys), bool)
+        act = system.active(ys)
+        hit = earlier.query(ys) if earlier is not None else None
+        for j, y in enumerate(ys):
+            x = pts[-1]
+            if not inside[j]:
+                c = _clip(system, box, x, y, h)
+                if c is not None:
+                    if np.linalg.norm(c - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+                        pts[-1] = c
+                    else:
+                        pts.append(c)
+                    return pts[1:], "box", None
+                return pts[1:], "lost", None
+            if cand[j]:
+                z = _crossing(systems, si, x, y, h, near)
+                if z is not None:
+                    if np.linalg.norm(z - x) > np.linalg.norm(y - x) and np.linalg.norm(z - y) >= tol.CURVE_MERGE * h:
+                        pts.append(y)  # the meeting point lies beyond y
+                    elif np.linalg.norm(z - pts[-1]) < tol.CURVE_MERGE * h and len(pts) > 1:
+                        pts.pop()
                     pts.append(z)
+                    return pts[1:], "meet", None
+            if not act[j]:
+                return pts[1:], "end", y
+            if hit is not None and hit[0][j] <= tol.CREASE_ONTO * h:
+                pts.append(earlier.data[hit[1][j]].copy())
                 return pts[1:], "meet", None
-            return pts[1:], "lost", None
-        if not np.all((y >= box[:, 0]) & (y <= box[:, 1])):
-            c = _clip(system, box, x, y, h)
-            if c is not None:
-                if np.linalg.norm(c - x) < tol.CURVE_MERGE * h and len(pts) > 1:
-                    pts[-1] = c
-                else:
-                    pts.append(c)
-                return pts[1:], "box", None
-            return pts[1:], "lost", None
-        if systems is not None and len(systems) > 1:
-            z = _crossing(systems, si, x, y, h, near)
-            if z is not None:
-                if np.linalg.norm(z - x) > np.linalg.norm(y - x) and np.linalg.norm(z - y) >= tol.CURVE_MERGE * h:
-                    pts.append(y)  # the meeting point lies beyond y
-                elif np.linalg.norm(z - pts[-1]) < tol.CURVE_MERGE * h and len(pts) > 1:
-                    pts.pop()
-                pts.append(z)
-                return pts[1:], "meet", None
-        if not system.active(y[None])[0]:
-            return pts[1:], "end", y
-        if earlier is not None:
-            d, i = earlier.query(y)
-            if d <= tol.CREASE_ONTO * h:
-                pts.append(earlier.data[i].copy())
-                return pts[1:], "meet", None
-        if back_at_start(y, pts, h):
-            return pts[1:], "closed", None
-        t_new = _tangent(system, y)[0]
-        t = t_new if np.dot(t_new, y - x) >= 0 else -t_new
-        pts.append(y)
+            if back_at_start(y, pts, h):
+                return pts[1:], "closed", None
+            pts.append(y)
+            n += 1
+        t = ts[-1]
+        ahead = min(2 * max(ahead, 1), tol.CREASE_AHEAD_MAX)
     return pts[1:], "lost", None
+
+
+def _steps_ahead(system: CreaseSystem, x: np.ndarray, t: np.ndarray, h: float, k: int):
+    """Up to k steps of a trace from x along t in one Newton call: the points and their tangents.
+
+    Newton from x + j h t (j = 1 ... k) with the reach of a single step;
+    kept while each point is what a single step from the one before would
+    accept (within h of that step's prediction, and ahead along its
+    tangent): on a straight crease all of them, on a curved one the first
+    few.  Returns ((m, 3), (m, 3)) with m <= k, tangents oriented along the trace.
+    """
+    pred = x + h * np.arange(1, k + 1)[:, None] * t
+    z, ok = _newton(system, pred, h)
+    tz = _tangent(system, z)
+    prev, tp = x, t
+    m = 0
+    for j in range(k):
+        d = z[j] - prev
+        if not ok[j] or np.dot(d, tp) <= 0.3 * h or np.linalg.norm(d - h * tp) > h:
+            break
+        tz[j] = tz[j] if np.dot(tz[j], d) >= 0 else -tz[j]
+        prev, tp = z[j], tz[j]
+        m += 1
+    return z[:m], tz[:m]
+
+
+def _one_step(system: CreaseSystem, box: np.ndarray, pts: list, t: np.ndarray, h: float, systems, si, near):
+    """One step of a trace (a whole, half or quarter step): ((1, 3), (1, 3), None), or how the trace ended.
+
+    Where no step lands (Newton fails past a point where another crease
+    meets this one), the meeting point is appended to ``pts`` ("meet"), or
+    the trace is lost.
+    """
+    x = pts[-1]
+    for scale in (1.0, 0.5, 0.25):
+        z, ok = _newton(system, (x + scale * h * t)[None], scale * h)
+        if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
+            y = z[0]
+            t_new = _tangent(system, y)[0]
+            return y[None], (t_new if np.dot(t_new, y - x) >= 0 else -t_new)[None], None
+    z = _crossing(systems, si, x, x + h * t, h, near) if systems is not None and len(systems) > 1 else None
+    if z is not None:
+        if np.linalg.norm(z - x) < tol.CURVE_MERGE * h and len(pts) > 1:
+            pts[-1] = z  # x was Newton's landing next to (or on) the corner
+        else:
+            pts.append(z)
+        return None, None, "meet"
+    return None, None, "lost"
+
+
+def _crossing_candidates(systems: list, si: int, ys: np.ndarray, h: float, near) -> np.ndarray:
+    """(k,) bool: another kink's two functions both come within two steps of ys[j] (to first order).
+
+    The test :func:`_crossing` makes first, for all the points at once:
+    only where it holds is the crossing looked for.
+    """
+    out = np.zeros(len(ys), bool)
+    others = [sj for sj in range(len(systems)) if sj != si]
+    mask = np.stack([near(sj, ys) if near is not None else np.ones(len(ys), bool) for sj in others], 1)
+    if not mask.any():
+        return out
+    both = kink_values([systems[sj] for sj in others], ys)
+    for c, sj in enumerate(others):
+        rows = np.nonzero(mask[:, c])[0]
+        if not len(rows):
+            continue
+        v, g = (both[0][rows, c], both[1][rows, c]) if both is not None else systems[sj].values(ys[rows])
+        with np.errstate(invalid="ignore"):
+            out[rows] |= np.all(np.abs(v) <= 2.0 * h * np.linalg.norm(g, axis=2), axis=1)
+    return out
 
 
 def _ends(system_of: list, systems: list, inside: np.ndarray, outside: np.ndarray, h: float) -> np.ndarray:
@@ -267,14 +340,21 @@ def _ends(system_of: list, systems: list, inside: np.ndarray, outside: np.ndarra
     return a
 
 
+def _stacked_values(systems: list, which: list, x: np.ndarray):
+    """The equations of the creases ``which`` at one point x, stacked: (2k,) values and (2k, 3) gradients."""
+    both = kink_values([systems[s] for s in which], x[None])
+    if both is not None:
+        return both[0][0].reshape(-1), both[1][0].reshape(-1, 3)
+    vs, gs = zip(*(systems[s].values(x[None]) for s in which))
+    return np.concatenate([a[0] for a in vs]), np.concatenate([a[0] for a in gs])
+
+
 def _corner(systems: list, which: list, start: np.ndarray, h: float):
     """Gauss-Newton from ``start`` on the stacked equations of the creases ``which``: the point, or None."""
     x = np.array(start, float)
     with np.errstate(all="ignore"):
         for _ in range(tol.CREASE_NEWTON):
-            vs, gs = zip(*(systems[s].values(x[None]) for s in which))
-            v = np.concatenate([a[0] for a in vs])
-            g = np.concatenate([a[0] for a in gs])
+            v, g = _stacked_values(systems, which, x)
             if not (np.isfinite(g).all() and np.isfinite(v).all()):
                 return None
             step = np.linalg.lstsq(g, v, rcond=1e-13)[0]
@@ -283,9 +363,8 @@ def _corner(systems: list, which: list, start: np.ndarray, h: float):
             x = x_new
             if small:
                 break
-        vs, gs = zip(*(systems[s].values(x[None]) for s in which))
-        v = np.concatenate([a[0] for a in vs])
-        size = np.linalg.norm(np.concatenate([a[0] for a in gs]), axis=1) * max(float(np.abs(x).max()), 1.0)
+        v, g = _stacked_values(systems, which, x)
+        size = np.linalg.norm(g, axis=1) * max(float(np.abs(x).max()), 1.0)
     good = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300))
     return x if good and np.linalg.norm(x - start) <= 2.0 * tol.CREASE_CORNER * h else None
 
@@ -398,7 +477,10 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
     trees = [cKDTree(p) if len(p) else None for p in found]
 
     def near(sj, y):
-        return trees[sj] is not None and trees[sj].query(y, distance_upper_bound=radius)[0] <= radius
+        # (one point or several)
+        if trees[sj] is None:
+            return np.zeros(np.shape(y)[:-1], bool)
+        return trees[sj].query(y, distance_upper_bound=radius)[0] <= radius
 
     others = []  # the lines of the kinks before this one
     for si, system in enumerate(systems):
@@ -415,11 +497,23 @@ def trace_creases(surface: Surface, box: np.ndarray, step: float, level: int | N
             gap = np.min([_point_polyline_distance(samples, p) for p in others if len(p) > 1]
                          or [np.full(len(samples), np.inf)], axis=0)
             covered |= gap <= tol.CREASE_SAME * h
+        # Samples where grad G1 and grad G2 are parallel have no tangent: a
+        # patch of common zeros, not a curve (a Min of two boxes whose faces
+        # are coplanar is tied on the whole face they touch along), whose
+        # traces were lost at once both ways, a few ms each, hundreds of them.
+        _, g = system.values(samples)
+        with np.errstate(all="ignore"):
+            cross = np.linalg.norm(np.cross(g[:, 0], g[:, 1]), axis=1)
+            flat = ~(cross > tol.CREASE_JUMP * np.linalg.norm(g[:, 0], axis=1) * np.linalg.norm(g[:, 1], axis=1))
         traced = []  # this crease's lines so far
         for i in range(len(samples)):
             if covered[i]:
                 continue
             x0 = samples[i]
+            if flat[i]:
+                # (as a trace lost at once: the samples near it are covered)
+                covered[tree.query_ball_point(x0, 1.5 * h)] = True
+                continue
             t0 = _tangent(system, x0)[0]
             earlier = cKDTree(np.concatenate(traced + others)) if traced or others else None
             fwd, how_f, out_f = _trace_one_way(system, box, x0, t0, h, max_steps, systems, si, near, earlier)
