@@ -468,7 +468,7 @@ def _side_signs(surface, tree, lines, line_of, pos):
     # face: a line through the top face of one and the bottom face of the
     # other, at the same distance from the patch, has its midpoint on it).
     # Read as +, both roots were touchings and the strips next to the two
-    # faces had no events (fuzz-free: the rotated stack of boxes, 602 open
+    # faces had no events (the float-rotated stack of boxes: 602 open
     # edges).  Between two roots F has one sign: the quarters tell it.
     for frac in (0.25, 0.75):
         redo = np.flatnonzero(zero)
