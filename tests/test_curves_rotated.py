@@ -17,6 +17,7 @@ from singmesh.facets.triangulate import triangulate_polygons
 from singmesh.skeleton.singular_curves import singular_curves
 from singmesh.surface import Surface
 from test_curves import BOX1, check_curve_mesh, float_rotated, lambdas, mesh_quiet
+from test_rounded import float_rotated as rounded_float_rotated
 
 ROMAN = "x^2 y^2 + y^2 z^2 + z^2 x^2 - x y z"
 
@@ -311,3 +312,38 @@ def test_sphere_and_plane_circle_leaving_a_face_at_a_small_angle():
     p = circle[np.argmax(circle[:, 0])]
     box = ((p[0] - 1.6, p[0] - 0.003), (p[1] - 1.03, p[1] + 0.97), (p[2] - 0.98, p[2] + 1.02))
     check_curve_mesh(text, box, 1, half_sheets=4, coarse=8, fine=64)
+
+
+TOBEL = "x^3 z + x^2 + y z^3 + z^4 - 3 x y z"   # Hauser's Tobel
+
+
+def test_tobel_sheets_touching_on_a_double_line_are_not_bridged():
+    # The y-axis is a double line: across it x^2 - 3 y x z + ..., two
+    # sheets for y != 0, which touch at the origin (x^2 + z^4 there) and
+    # part on both sides with the same type.  No change of type was seen
+    # and the tube was not widened there: an edge of four triangles off
+    # the curve joined the two sheets 3 cells from it.
+    check_curve_mesh(TOBEL, ((-1.5, 1.5),) * 3, None)
+
+
+@pytest.mark.parametrize("seed", [3, 11, 30])
+def test_tobel_tangency_of_sheets_is_a_special_point_under_float_rotation(seed):
+    # The same point in general position (15-digit float rotation and
+    # shift): a special point of the curve, where the typed surface's
+    # origin went (the normal Hessian diag(2, 0) there: rank one), and
+    # the line cut there into two double curves.
+    text, shift = rounded_float_rotated(TOBEL, seed)
+    m = mesh_quiet(text, ((-1.5, 1.5),) * 3)
+    near = [sp for sp in m.special_points if np.linalg.norm(sp.point - shift) <= 1e-4]
+    assert [sp.kind for sp in near] == ["change of type"]
+    assert sorted(c.type for c in m.singular_curves) == ["A1 double curve"] * 2
+    # ... and no edge of more than two triangles off the curve.
+    mm = m.to_meshio()
+    V = np.asarray(mm.points, float)
+    T = np.concatenate([c.data for c in mm.cells if c.type == "triangle"])
+    counts = mc.edge_counts(T)
+    edges = np.array([e for e, n in counts.items() if n > 2], np.int64).reshape(-1, 2)
+    _, G, _, _ = lambdas(text)
+    g = np.linalg.norm(G(V), axis=1)
+    singular = g <= 1e-6 * float(np.median(g[g > 0]))
+    assert singular[edges].all()
