@@ -305,9 +305,20 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
 
 
 def _local_residual(surface: Surface, x: np.ndarray, alone: bool) -> np.ndarray:
-    """max(|F| / |F's terms|, |F_i| / |F_i's terms|) at x (k, 3): 0 at an exact zero, ~eps at rounding level."""
+    """max(|F| / |F's terms|, |F_i| / |F_i's terms|) at x (k, 3): 0 at an exact zero, ~eps at rounding level.
+
+    The terms' size is at least what rounding x itself moves F and F_i by
+    (eps |x| in each coordinate, times |grad F| and the Hessian's rows):
+    on a curve in a coordinate plane (Spitz's x^2 = y^3, z = 0) Newton
+    leaves z at 1e-57 rather than 0, every term of F_z has a factor z, and
+    F_z / its terms is 1 there however close to the curve the point is
+    (trace steps refused all along it, the curve cut short).
+    """
     f, g = _rows_eval(surface.value_gradient, x, alone)
     mag, gmag = _rows_eval(lambda y: tuple(np.asarray(m, float) for m in surface.magnitudes_each(y)), x, True)
+    shift = np.finfo(float).eps * np.abs(x).max(axis=1)
+    mag = np.maximum(mag, np.abs(g).sum(axis=1) * shift)
+    gmag = np.maximum(gmag, np.abs(surface.hessian(x)).sum(axis=2) * shift[:, None])
     with np.errstate(all="ignore"):
         rf = np.where(f == 0, 0.0, np.abs(f) / np.maximum(mag, 1e-300))
         rg = np.where(g == 0, 0.0, np.abs(g) / np.maximum(gmag, 1e-300)).max(axis=1)

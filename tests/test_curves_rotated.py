@@ -347,3 +347,39 @@ def test_tobel_tangency_of_sheets_is_a_special_point_under_float_rotation(seed):
     g = np.linalg.norm(G(V), axis=1)
     singular = g <= 1e-6 * float(np.median(g[g > 0]))
     assert singular[edges].all()
+
+
+SPITZ = "(y^3 - x^2 - z^2)^3 - 27 x^2 y^3 z^2"   # Hauser's Spitz
+
+
+def test_spitz_cuspidal_edge_in_a_coordinate_plane_is_traced_to_the_box():
+    # Spitz's singular locus holds the cusp x^2 = y^3 in the plane z = 0
+    # (sympy: y^2 (x^2 +- 3 x z - y^3 + z^2) in its Groebner basis).
+    # Newton left z at ~1e-57 instead of 0 there; every term of F_z has a
+    # factor z, so F_z over its terms was 1 and each trace step was
+    # refused as "off the curve": the branch x < 0 ended 0.33 short of the
+    # box ("end of the trace"), an open edge in the mesh.
+    curves = singular_curves(Surface.parse(SPITZ), ((-2.0, 2.0),) * 3, step=4.0 / 128)
+    kinds = [sp.kind for sp in curves.special]
+    assert "end of the trace" not in kinds
+    ends = np.array([sp.point for sp in curves.special if sp.kind == "end on the box"])
+    y = 4.0 ** (1.0 / 3.0)   # x^2 = y^3 at x = +-2, and z^2 = y^3 at z = +-2
+    for p in ([-2.0, y, 0.0], [2.0, y, 0.0], [0.0, y, -2.0], [0.0, y, 2.0]):
+        # (an end on a cuspidal edge: a multiple root across it, placed to ~1e-9)
+        assert np.linalg.norm(ends - np.array(p), axis=1).min() <= 1e-7
+
+
+def test_curve_vertex_a_hair_off_a_coordinate_plane_is_at_rounding_level():
+    # A trace step's vertex on Spitz's cusp x^2 = y^3, z = 0, as Newton
+    # left it (z = 8.5e-57): F and grad F at rounding level, measured
+    # against the terms of F and F_i and what rounding the point moves
+    # them by; F_z's terms alone (each with a factor z) made it 1.
+    from singmesh.skeleton.singular import accept_residual
+    from singmesh.skeleton.singular_curves import _local_residual
+
+    surface = Surface.parse(SPITZ)
+    for z in (0.0, 8.467410322771511e-57, 1e-30):
+        x = np.array([[-1.589629021049267, 1.362062975441674, z]])
+        # F ~ (y^3 - x^2)^3 across the cusp: rounding level up to |y^3 - x^2| ~ eps^(1/3).
+        assert abs(x[0, 0] ** 2 - x[0, 1] ** 3) <= 1e-6
+        assert _local_residual(surface, x, True)[0] <= accept_residual(surface), z
