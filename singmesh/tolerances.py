@@ -503,6 +503,15 @@ CURVE_EDGE_NEWTON = 8
 #: within its radius) are placed to this fraction of a cell.
 CURVE_TYPE_PLACE = 1e-3
 
+#: A point where the sheets through an A1 curve touch (the normal
+#: Hessian's eigenvalue ratio r has a double zero, no change of sign): a
+#: vertex where |r| is least, and the parabola through it and its two
+#: neighbours falls to this fraction of theirs or below.  At a double zero
+#: the parabola reaches 0 up to the cubic terms (a few 1e-3 of the
+#: neighbours' at a cell's spacing); a generic minimum of |r| over a step
+#: stays within a few per cent of its neighbours'.
+CURVE_TANGENCY_RTOL = 0.02
+
 #: The point search leaves alone candidate boxes this many cells from a
 #: traced curve (its pinch and triple points are the curve's).
 CURVE_AVOID = 3.0

@@ -305,9 +305,20 @@ def _correct(surface: Surface, q: np.ndarray, across: np.ndarray, h, each: bool 
 
 
 def _local_residual(surface: Surface, x: np.ndarray, alone: bool) -> np.ndarray:
-    """max(|F| / |F's terms|, |F_i| / |F_i's terms|) at x (k, 3): 0 at an exact zero, ~eps at rounding level."""
+    """max(|F| / |F's terms|, |F_i| / |F_i's terms|) at x (k, 3): 0 at an exact zero, ~eps at rounding level.
+
+    The terms' size is at least what rounding x itself moves F and F_i by
+    (eps |x| in each coordinate, times |grad F| and the Hessian's rows):
+    on a curve in a coordinate plane (Spitz's x^2 = y^3, z = 0) Newton
+    leaves z at 1e-57 rather than 0, every term of F_z has a factor z, and
+    F_z / its terms is 1 there however close to the curve the point is
+    (trace steps refused all along it, the curve cut short).
+    """
     f, g = _rows_eval(surface.value_gradient, x, alone)
     mag, gmag = _rows_eval(lambda y: tuple(np.asarray(m, float) for m in surface.magnitudes_each(y)), x, True)
+    shift = np.finfo(float).eps * np.abs(x).max(axis=1)
+    mag = np.maximum(mag, np.abs(g).sum(axis=1) * shift)
+    gmag = np.maximum(gmag, np.abs(surface.hessian(x)).sum(axis=2) * shift[:, None])
     with np.errstate(all="ignore"):
         rf = np.where(f == 0, 0.0, np.abs(f) / np.maximum(mag, 1e-300))
         rg = np.where(g == 0, 0.0, np.abs(g) / np.maximum(gmag, 1e-300)).max(axis=1)
@@ -1466,6 +1477,9 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
             special[v] = "end on the box" if on_box[v] else ("crossing of curves" if deg[v] > 2 else "end of the trace")
     names = list(names)
     P = P.copy()
+    for v, x in _tangencies(surface, g, P, names, special, deg, step).items():
+        special[v] = "change of type"
+        P[v] = x
     jobs = []
     for v in np.nonzero(deg == 2)[0].tolist():
         if v in special:
@@ -1550,6 +1564,75 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
                                     ends=ends, vertices=np.asarray(verts, np.int64)))
     return CurveSet(points=P, edges=E, pieces=pieces, special=specials,
                     special_vertex=np.asarray(sp_vertices, np.int64))
+
+
+def _eigen_ratio(surface: Surface, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Signed ratio small / large of the eigenvalues of the Hessian in the plane normal to t, at x (k, 3).
+
+    Negative along a double curve, positive along an isolated line; zero
+    where the two (real or complex) sheets through the curve touch.
+    """
+    frames = np.stack([_normal_frame(ti) for ti in t])  # (k, 3, 2)
+    hn = np.einsum("kia,kij,kjb->kab", frames, surface.hessian(x), frames)
+    lam = np.linalg.eigvalsh(hn)
+    big = np.where(np.abs(lam[:, 0]) >= np.abs(lam[:, 1]), lam[:, 0], lam[:, 1])
+    small = np.where(np.abs(lam[:, 0]) >= np.abs(lam[:, 1]), lam[:, 1], lam[:, 0])
+    with np.errstate(all="ignore"):
+        return np.where(big != 0, small / np.where(big != 0, big, 1.0), 0.0)
+
+
+def _tangencies(surface: Surface, g: nx.Graph, P: np.ndarray, names: list, special: dict, deg: np.ndarray,
+                step: float) -> dict:
+    """Points of an A1 curve where its two sheets touch without the type changing on either side.
+
+    Along a double curve (or an isolated line) the normal Hessian's
+    eigenvalue ratio r may touch zero at one point and keep its sign: the
+    sheets become tangent there (Tobel x^3 z + x^2 + y z^3 + z^4 - 3xyz on
+    the y-axis: A1, A3 at 0, A1 again; Kolibri's cusp point).  Both
+    neighbouring vertices read the same type, so no change of type is
+    seen, yet near it the two sheets stay within a cell of each other
+    several cells out and the tube, not widened there, bridged them (an
+    edge of four triangles off the curve).  Such a point is a vertex v
+    where |r| has a local minimum that the parabola through v and its two
+    neighbours puts at ``CURVE_TANGENCY_RTOL`` of theirs or below (|r|
+    falls as the square of the distance to a double zero); it is moved
+    there along the chord and Newton put it back on the curve.
+
+    Returns {vertex: its new point}.
+    """
+    cand = []
+    for v in np.nonzero(deg == 2)[0].tolist():
+        if v in special:
+            continue
+        a, b = list(g.neighbors(v))
+        if a in special or b in special or names[a] != names[b] or not names[a].startswith("A1"):
+            continue
+        cand.append((v, a, b))
+    if not cand:
+        return {}
+    v, a, b = np.array(cand, np.int64).T
+    t = P[b] - P[a]
+    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    m = np.abs(_eigen_ratio(surface, np.concatenate([P[a], P[v], P[b]]), np.concatenate([t, t, t])))
+    ma, mv, mb = m.reshape(3, -1)
+    da = np.linalg.norm(P[v] - P[a], axis=1)
+    db = np.linalg.norm(P[b] - P[v], axis=1)
+    lowest = (mv <= ma) & (mv <= mb)
+    # The parabola m0 + m1 s + m2 s^2 through (-da, ma), (0, mv), (db, mb).
+    with np.errstate(all="ignore"):
+        sa, sb = (ma - mv) / da, (mb - mv) / db
+        m2 = (sa + sb) / (da + db)
+        m1 = sb - m2 * db
+        s_min = np.where(m2 > 0, -m1 / (2 * m2), 0.0)
+        low = np.where(m2 > 0, mv - m1 * m1 / (4 * m2), mv)
+    hit = lowest & (low <= tol.CURVE_TANGENCY_RTOL * np.maximum(ma, mb)) & np.isfinite(low)
+    if not hit.any():
+        return {}
+    rows = np.nonzero(hit)[0]
+    along = np.clip(s_min[rows], -0.5 * da[rows], 0.5 * db[rows])
+    start = P[v[rows]] + along[:, None] * t[rows]
+    y, ok = _correct(surface, start, t[rows], step, each=True, limit=_vertex_limit(surface), polish=True)
+    return {int(v[r]): (y[i] if ok[i] else P[v[r]].copy()) for i, r in enumerate(rows)}
 
 
 def _transversal_branches(P: np.ndarray, v: int, neighbours: list) -> bool:

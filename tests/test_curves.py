@@ -187,7 +187,8 @@ def check_curve_mesh(text, box, components=1, half_sheets=None, oracle=None, **k
     segs = np.concatenate([on_curve, L]) if len(L) else on_curve
     d = segment_distance(samples, V[segs[:, 0]], V[segs[:, 1]])
     assert d.max() <= 0.01 * size, f"{(d > 0.01 * size).sum()} curve samples far from the curve's edges"
-    assert mc.components(T) == components
+    if components is not None:   # None: not known independently (as the judge does for Crixxi)
+        assert mc.components(T) == components
     if half_sheets is not None:
         # Each edge along the curve (not at its ends) has one triangle per half-sheet.
         inner = on_curve[~mc.on_box(V[on_curve[:, 0]], box, 1e-3) & ~mc.on_box(V[on_curve[:, 1]], box, 1e-3)]
