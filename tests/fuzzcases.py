@@ -567,6 +567,9 @@ def _sign_change_near(field: Field, pts, radius, n: int = 400) -> np.ndarray:
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     d = np.concatenate([d, np.eye(3), -np.eye(3)])
     g = field.grad(pts)
+    # Scaled first: at a vertex on a curve of singular points grad F may be
+    # 1e-196, whose square underflows (a zero norm made g 1e104 long).
+    g = g / np.maximum(np.abs(g).max(axis=1, keepdims=True), 1e-300)
     g = g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
     q = pts[:, None, :] + radius * np.concatenate([d[None].repeat(len(pts), 0), g[:, None], -g[:, None]], axis=1)
     v = field.value(q)
