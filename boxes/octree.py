@@ -351,7 +351,21 @@ def refine_stars(surface: Surface, tree: Octree, stars: np.ndarray) -> Octree:
     )
 
 
-class StackedRows:
+class _LazyRows:
+    """What the lazy row stores below share: a length and a size in bytes from ``shape`` and ``dtype``."""
+
+    shape: tuple
+    dtype: np.dtype
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    @property
+    def nbytes(self) -> int:
+        return int(np.prod(self.shape)) * self.dtype.itemsize
+
+
+class StackedRows(_LazyRows):
     """The ``data`` of a subdivision's leaves: the levels' stacks one after the other.
 
     Stands for ``np.concatenate(parts)`` without the copy (Barth's sextic:
@@ -369,13 +383,6 @@ class StackedRows:
         self._whole = None
         self.shape = (int(self._ends[-1]),) + parts[0].shape[1:]
         self.dtype, self.ndim = parts[0].dtype, parts[0].ndim
-
-    def __len__(self) -> int:
-        return self.shape[0]
-
-    @property
-    def nbytes(self) -> int:
-        return int(np.prod(self.shape)) * self.dtype.itemsize
 
     def __array__(self, dtype=None, copy=None):
         if self._whole is None:
@@ -402,7 +409,7 @@ class StackedRows:
         return np.asarray(self)[index]
 
 
-class KeptRows:
+class KeptRows(_LazyRows):
     """The ``data`` of a tree made from another: rows kept from the other's and new rows after them.
 
     Stands for ``np.concatenate([data[keep]] + more)`` without copying the
@@ -418,13 +425,6 @@ class KeptRows:
         self._whole = None
         self.shape = (len(self._rows) + len(self._more),) + data.shape[1:]
         self.dtype, self.ndim = data.dtype, data.ndim
-
-    def __len__(self) -> int:
-        return self.shape[0]
-
-    @property
-    def nbytes(self) -> int:
-        return int(np.prod(self.shape)) * self.dtype.itemsize
 
     def __array__(self, dtype=None, copy=None):
         if self._whole is None:

@@ -571,6 +571,30 @@ def test_boxes_with_coplanar_faces_joined_by_min(seed):
     _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, corners.T).T, starts=1500, on=(a, b))
 
 
+def _stacked_boxes(rot: np.ndarray):
+    """The box standing on a larger one, joined by Min, in the frame ``rot``.
+
+    Returns the equation, the corners of both boxes, the pairs of face
+    planes meeting on their edges, and the 24 edges' ends (all in the
+    original frame).
+    """
+    L = [_lin(row) for row in rot]
+    eq = ("Min(Max(Abs({0})-0.6, Abs({1})-0.6, Abs({2}+0.2)-0.2), "
+          "Max(Abs({0})-0.3, Abs({1})-0.3, Abs({2}-0.2)-0.2))").format(*L)
+    corners = [[a, b, c] for a in (-0.6, 0.6) for b in (-0.6, 0.6) for c in (-0.4, 0.0)]
+    corners += [[a, b, c] for a in (-0.3, 0.3) for b in (-0.3, 0.3) for c in (0.0, 0.4)]
+    low = [f"{L[0]}+0.6", f"{L[0]}-0.6", f"{L[1]}+0.6", f"{L[1]}-0.6", f"{L[2]}+0.4", f"{L[2]}"]
+    high = [f"{L[0]}+0.3", f"{L[0]}-0.3", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[2]}", f"{L[2]}-0.4"]
+    pairs = [(a, b) for faces in (low, high) for i, a in enumerate(faces) for b in faces[i + 1:]
+             if a[:len(L[0])] != b[:len(L[0])]]
+    # The 12 edges of each box (the lines of the pairs run on in the flat faces).
+    ends = [(np.array(p, float), np.array(q, float)) for k in (0, 8) for i, p in enumerate(corners[k:k + 8])
+            for q in corners[k + i + 1:k + 8] if np.sum(np.array(p) != np.array(q)) == 1]
+    a = np.linalg.solve(rot, np.array([e[0] for e in ends]).T).T
+    b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
+    return eq, np.linalg.solve(rot, np.array(corners, float).T).T, pairs, len(ends), (a, b)
+
+
 @pytest.mark.parametrize("seed", [None])
 def test_stacked_boxes_touching_along_a_face(seed):
     # A box standing on a larger one, joined by Min: |u|, |v| <= 0.6,
@@ -583,9 +607,7 @@ def test_stacked_boxes_touching_along_a_face(seed):
     # 688 open edges at 512).  The union's boundary: closed, chi 2, the rim
     # a crease with two triangles per edge.
     rot = np.eye(3) if seed is None else _rotation(seed)
-    L = [_lin(row) for row in rot]
-    eq = ("Min(Max(Abs({0})-0.6, Abs({1})-0.6, Abs({2}+0.2)-0.2), "
-          "Max(Abs({0})-0.3, Abs({1})-0.3, Abs({2}-0.2)-0.2))").format(*L)
+    eq, corners, pairs, n_edges, on = _stacked_boxes(rot)
     box = np.array([[-1.2, 1.2]] * 3)
     # (At fine 128 alone 16 edges are still open round the patch: the
     # strips fail and the mesh is made again at 256.)
@@ -597,20 +619,8 @@ def test_stacked_boxes_touching_along_a_face(seed):
     assert not np.any((np.abs(c[:, 2]) < 1e-9) & (np.abs(c[:, :2]).max(axis=1) < 0.3)), "triangles on the patch"
     # Every edge of both boxes, and the rim, is on crease edges with two triangles each; the
     # corners are vertices.
-    corners = [[a, b, c] for a in (-0.6, 0.6) for b in (-0.6, 0.6) for c in (-0.4, 0.0)]
-    corners += [[a, b, c] for a in (-0.3, 0.3) for b in (-0.3, 0.3) for c in (0.0, 0.4)]
-    low = [f"{L[0]}+0.6", f"{L[0]}-0.6", f"{L[1]}+0.6", f"{L[1]}-0.6", f"{L[2]}+0.4", f"{L[2]}"]
-    high = [f"{L[0]}+0.3", f"{L[0]}-0.3", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[2]}", f"{L[2]}-0.4"]
-    pairs = [(a, b) for faces in (low, high) for i, a in enumerate(faces) for b in faces[i + 1:]
-             if a[:len(L[0])] != b[:len(L[0])]]
-    # The 12 edges of each box (the lines of the pairs run on in the flat faces).
-    ends = [(np.array(p, float), np.array(q, float)) for k in (0, 8) for i, p in enumerate(corners[k:k + 8])
-            for q in corners[k + i + 1:k + 8] if np.sum(np.array(p) != np.array(q)) == 1]
-    assert len(ends) == 24
-    a = np.linalg.solve(rot, np.array([e[0] for e in ends]).T).T
-    b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
-    _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, np.array(corners, float).T).T, starts=1500,
-                         on=(a, b))
+    assert n_edges == 24
+    _corners_and_creases(m, eq, pairs, box, corners, starts=1500, on=on)
 
 
 def test_corner_on_coincident_box_edges_is_exact():
@@ -846,9 +856,7 @@ def test_stacked_boxes_rotated_are_closed():
     from scipy.spatial.transform import Rotation
 
     rot = np.array([[float(f"{c:.15g}") for c in row] for row in Rotation.random(random_state=1).as_matrix()])
-    L = [_lin(row) for row in rot]
-    eq = ("Min(Max(Abs({0})-0.6, Abs({1})-0.6, Abs({2}+0.2)-0.2), "
-          "Max(Abs({0})-0.3, Abs({1})-0.3, Abs({2}-0.2)-0.2))").format(*L)
+    eq, corners, pairs, _, on = _stacked_boxes(rot)
     box = np.array([[-1.2, 1.2]] * 3)
     m = singmesh.mesh(eq, box=box, coarse=16, fine=128)
     V, T = m.vertices, m.faces
@@ -859,15 +867,4 @@ def test_stacked_boxes_rotated_are_closed():
     assert np.abs(F(V)).max() <= 1e-10
     c = V[T].mean(axis=1) @ rot.T
     assert not np.any((np.abs(c[:, 2]) < 1e-9) & (np.abs(c[:, :2]).max(axis=1) < 0.3)), "triangles on the patch"
-    corners = [[a, b, c] for a in (-0.6, 0.6) for b in (-0.6, 0.6) for c in (-0.4, 0.0)]
-    corners += [[a, b, c] for a in (-0.3, 0.3) for b in (-0.3, 0.3) for c in (0.0, 0.4)]
-    low = [f"{L[0]}+0.6", f"{L[0]}-0.6", f"{L[1]}+0.6", f"{L[1]}-0.6", f"{L[2]}+0.4", f"{L[2]}"]
-    high = [f"{L[0]}+0.3", f"{L[0]}-0.3", f"{L[1]}+0.3", f"{L[1]}-0.3", f"{L[2]}", f"{L[2]}-0.4"]
-    pairs = [(a, b) for faces in (low, high) for i, a in enumerate(faces) for b in faces[i + 1:]
-             if a[:len(L[0])] != b[:len(L[0])]]
-    ends = [(np.array(p, float), np.array(q, float)) for k in (0, 8) for i, p in enumerate(corners[k:k + 8])
-            for q in corners[k + i + 1:k + 8] if np.sum(np.array(p) != np.array(q)) == 1]
-    a = np.linalg.solve(rot, np.array([e[0] for e in ends]).T).T
-    b = np.linalg.solve(rot, np.array([e[1] for e in ends]).T).T
-    _corners_and_creases(m, eq, pairs, box, np.linalg.solve(rot, np.array(corners, float).T).T, starts=400,
-                         least=50, on=(a, b))
+    _corners_and_creases(m, eq, pairs, box, corners, starts=400, least=50, on=on)
