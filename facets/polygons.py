@@ -75,7 +75,11 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     """
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
-    plain |= stray_cycles(cycles, events, stars, [getattr(sp.classification, "branches", None) for sp in points])
+    # A point on a face of the box has only the branches inside it there:
+    # no count to tell its stray cycles by.
+    cut = topology.on_box_boundary(np.array([sp.point for sp in points]).reshape(-1, 3), tree.box, tol.STAR_ON_BOX)
+    expected = [None if c else getattr(sp.classification, "branches", None) for c, sp in zip(cut.tolist(), points)]
+    plain |= stray_cycles(cycles, events, stars, expected)
     tube = cycles.box == tube_id  # meshed as strips
     plain &= ~tube
     ev = cycles.events
@@ -90,19 +94,19 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     splits = {}
     next_key = int(events.key.max()) + 1 if len(events.key) else 0
     star_cycles = np.nonzero(~plain & ~tube)[0].tolist()
-    # A point on an edge of the box: the star's boundary holds it, and a
-    # cycle on the box's faces runs through it (a root event at the apex on
-    # the lattice line along the box edge).  Such a cycle is its own fan.
-    through, star_cycles = _through_apex(cycles, events, stars, points, star_cycles, tree.box)
-    for c, k in through:
+    # A point on a face of the box: the star's boundary holds it, and a
+    # cycle on the box's faces runs through it or passes it by.  Each piece
+    # of such a cycle from the point back to it is its own fan.
+    through, star_cycles = apex_pieces(cycles, events, links, tree, stars, points, star_cycles)
+    for c, pieces in through:
         i = stars[cycles.box[c]]
-        cyc = np.roll(ev[cycles.offsets[c]:cycles.offsets[c + 1]], -k)[1:]
-        parts_keys.append(np.concatenate([[point_key(i)], events.key[cyc]]))
-        parts_pts.append(np.concatenate([points[i].point[None], events.point[cyc]]))
-        parts_sq.append(np.full(len(cyc) + 1, -1, np.int64))
-        parts_sizes.append([len(cyc) + 1])
-        apex.append(np.ones(1, bool))
-        branches[i] = branches.get(i, 0) + 1
+        for cyc in pieces:
+            parts_keys.append(np.concatenate([[point_key(i)], events.key[cyc]]))
+            parts_pts.append(np.concatenate([points[i].point[None], events.point[cyc]]))
+            parts_sq.append(np.full(len(cyc) + 1, -1, np.int64))
+            parts_sizes.append([len(cyc) + 1])
+            apex.append(np.ones(1, bool))
+            branches[i] = branches.get(i, 0) + 1
     # The face squares of all star cycles' links at once; the Hessian and
     # the skeleton directions once per point (a node has two cycles).
     spans = [(int(cycles.offsets[c]), int(cycles.offsets[c + 1])) for c in star_cycles]
@@ -158,28 +162,73 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     return offsets, keys, pts, np.concatenate([np.asarray(a, bool) for a in apex]), branches, splits
 
 
-def _through_apex(cycles, events, stars: dict, points: list, star_cycles: list, box: np.ndarray):
-    """The star cycles that run through their own singular point, and the others.
+def apex_pieces(cycles, events, links, tree, stars: dict, points: list, star_cycles: list):
+    """The star cycles that pass their point on the box's boundary, cut there.
+
+    A singular point on a face of the box lies on its star's boundary.  At
+    the star's scale the surface is its tangent cone (as for every star),
+    whose cut by that face is a few rays from the point: each run of the
+    cycle's links on the face comes in along one ray and leaves along
+    another.  The links follow F + eps = 0, which joins the rays near the
+    point, through a root event at it (a box edge lying in the cone) or past
+    it, as the pairing of each square decides; near the point that pairing
+    has no derivative to go by and may join the rays either way (and two
+    rays less than a square apart may be joined far from it).  So only the
+    parts of the cycle off the face count: each run on the face is cut out,
+    and each piece between two runs is a fan from the point.  The events
+    inside a run lie on the rays, in line with the point (a fan over them
+    has no area), and only the star sees them (beyond the face is no box):
+    the pieces keep the events where the runs meet the star's other faces.
+
+    Parameters
+    ----------
+    cycles : Cycles
+    events : Events
+    links : FaceLinks
+    tree : Octree
+    stars : dict
+        Box id of each star -> index of its singular point in ``points``.
+    points : list of SingularPoint
+    star_cycles : list of int
+        The cycles of the stars.
 
     Returns
     -------
-    through : list of (cycle, position of the event at the point in it)
-    rest : list of the other cycles of ``star_cycles``
+    through : list of (cycle, pieces)
+        The cut cycles; ``pieces`` lists arrays of event indices in cycle
+        order, each fanned from the point (a cycle all on the face near the
+        point has none).
+    rest : list of int
+        The other cycles of ``star_cycles``.
     """
     through, rest = [], []
+    box = tree.box
     size = float(np.max(box[:, 1] - box[:, 0]))
     for c in star_cycles:
         p = points[stars[cycles.box[c]]].point
         if not topology.on_box_boundary(p[None], box, tol.STAR_ON_BOX)[0]:
             rest.append(c)
             continue
-        at = events.point[cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]]]
-        d = np.linalg.norm(at - p, axis=1)
-        k = int(np.argmin(d))
-        if d[k] <= tol.STAR_APEX_EVENT * size:
-            through.append((c, k))
-        else:
+        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
+        ev = cycles.events[span]
+        n = len(ev)
+        # Link j leaves event j, on its contact square.
+        axis, lo, hi = _square_bounds_many(tree, links.square[cycles.squares[span]])
+        on_face = np.abs(lo[np.arange(n), axis] - p[axis]) <= tol.STAR_ON_BOX * size
+        if not on_face.any():
             rest.append(c)
+            continue
+        # A piece starts after the last link of a run on the face.
+        starts = (np.flatnonzero(on_face & ~np.roll(on_face, -1)) + 1) % n
+        # Events between two links on the face are on the rays.
+        keep = ~(on_face & np.roll(on_face, 1))
+        pieces = []
+        for a, b in zip(starts, np.roll(starts, -1)):
+            idx = np.arange(a, b if b > a else b + n) % n
+            piece = ev[idx[keep[idx]]]
+            if len(piece) >= 2:
+                pieces.append(piece)
+        through.append((c, pieces))
     return through, rest
 
 

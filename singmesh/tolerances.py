@@ -957,9 +957,3 @@ CURVE_FLAT = 1e-6
 #: the classifier's branch count is no target for its star (singmesh.api).
 #: The centred points of float input sit within rounding of the face.
 STAR_ON_BOX = 1e-12
-#: A root event at most this far (fraction of the box) from a singular
-#: point on the box's boundary is the point itself: a cone's apex on an
-#: edge of the box is a (double) root of the lattice line along that edge,
-#: found to about sqrt(eps) of the box, and the star's cycle on the box's
-#: faces runs through it (facets.polygons).
-STAR_APEX_EVENT = 1e-7

@@ -275,7 +275,10 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
     margin = 1e-9 * size
 
     def accepted(x, lo, hi):
-        inside = np.all((x >= box[:, 0] - margin) & (x <= box[:, 1] + margin), axis=1)
+        # A degenerate point on a face of the box is fixed only to
+        # ~eps^(1/k) by Gauss-Newton, as likely outside as in: a start a
+        # cell out is centred first, then checked.
+        inside = np.all((x >= box[:, 0] - (hi - lo)) & (x <= box[:, 1] + (hi - lo)), axis=1)
         # Accept loosely first: degenerate points are only fixed to ~eps^(1/k)
         # in double precision, and centring decides.
         near_cell = np.all(np.abs(x - (lo + hi) / 2) <= 2.0 * (hi - lo), axis=1)
@@ -353,6 +356,8 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
                 continue
             if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
                 continue
+            # On a face of the box to rounding: on it (a vertex of the mesh).
+            q = np.minimum(np.maximum(q, box[:, 0]), box[:, 1])
             r = r_start if q.tobytes() == p.tobytes() else float(residual(surface, q))
             if r > limit:
                 continue
