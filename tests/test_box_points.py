@@ -227,3 +227,32 @@ def test_degenerate_points_on_the_box_boundary(text, expr, point):
     assert not non_manifold_edges(mesh.faces)
     if want:
         assert fans_at(mesh.faces, int(np.argmin(d))) == want
+
+
+@pytest.mark.parametrize("box", [((0.0, 1.8),) * 3, ((-1.8, 1.8), (-1.8, 1.8), (0.0, 1.8))], ids=["octant", "half"])
+def test_barth_sextic_cut_at_its_symmetry_planes(box):
+    # Users mesh an octant or a half of a symmetric surface: Barth's sextic
+    # has nodes on its symmetry planes (e.g. (0, 1/phi, phi)) where both
+    # nappes of the cone cross the plane, two fans inside the box.
+    import sympy
+
+    from benchmarks.nodes import find_nodes
+    from singmesh.surface import Surface, X, Y, Z
+
+    phi = (1 + 5 ** 0.5) / 2
+    text = (f"4*({phi}^2*x^2 - y^2)*({phi}^2*y^2 - z^2)*({phi}^2*z^2 - x^2)"
+            f" - (1 + 2*{phi})*(x^2 + y^2 + z^2 - 1)^2")
+    expr = Surface.parse(text).expr
+    truth = find_nodes(expr, box, starts=12)
+    lim = np.array(box)
+    on_faces = (np.abs(truth[:, :, None] - lim[None]) <= 1e-9).any(axis=(1, 2))
+    assert on_faces.sum() >= 6
+    m = singmesh.mesh(text, box)
+    f = sympy.lambdify((X, Y, Z), expr, "numpy")
+    assert not boundary_edges_off_box(m.vertices, m.faces, box)
+    assert not non_manifold_edges(m.faces)
+    for p in truth:
+        d = np.linalg.norm(m.vertices - p, axis=1)
+        assert int((d <= 1e-9 * 3.6).sum()) == 1, p
+        want = branches_on_sphere(lambda q: f(q[..., 0], q[..., 1], q[..., 2]), p, 0.02, 240, 480, box=lim)
+        assert fans_at(m.faces, int(np.argmin(d))) == want, p
