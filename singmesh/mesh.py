@@ -380,11 +380,14 @@ class Mesh:
         not a mesh vertex, and a point whose number of triangle fans differs
         from its branches, with the reason where it is known.
         """
-        lost = [s for s in self.singularities
-                if s.vertex is None and (getattr(s.classification, "branches", None) or 0) > 0]
-        # On a face of the box only the branches inside it meet the point.
+        # On a face of the box only the branches inside it meet the point:
+        # none where the cone points out of the box (its star has no cycle),
+        # and it is no vertex then unless its star was given up.
         cut = topology.on_box_boundary(np.array([s.point for s in self.singularities], float).reshape(-1, 3),
                                        self.box, tol.STAR_ON_BOX)
+        lost = [s for s, c in zip(self.singularities, cut.tolist())
+                if s.vertex is None and (getattr(s.classification, "branches", None) or 0) > 0
+                and (not c or self.stats.get("overlapping_stars"))]
         wrong = [s for s, c in zip(self.singularities, cut.tolist()) if s.vertex is not None and not c
                  and getattr(s.classification, "branches", None) not in (None, s.branches)]
         out = []
