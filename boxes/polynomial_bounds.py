@@ -67,7 +67,16 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
         # Each axis only on the boxes no earlier axis passed.
         t = tensors if len(todo) == len(tensors) else tensors[todo]
         ok = sign_definite(derivative(t, a), (1, 2, 3))
-        ok[ok] = face_without_loops(np.take(t[ok], 0, axis=1 + a)) & face_without_loops(np.take(t[ok], -1, axis=1 + a))
+        k = np.flatnonzero(ok)
+        if len(k):
+            # Both end faces normal to a of the boxes that passed, gathered
+            # at once as (K, 2, u, v) (not each box's whole tensor, twice),
+            # and tested in one call.
+            index = [k[:, None], slice(None), slice(None), slice(None)]
+            index[1 + a] = np.array([0, tensors.shape[1 + a] - 1])
+            ends = t[tuple(index)]
+            loopless = face_without_loops(ends.reshape((2 * len(k),) + ends.shape[2:])).reshape(len(k), 2)
+            ok[k] = loopless[:, 0] & loopless[:, 1]
         result[todo[ok]] = a
         todo = todo[~ok]
         if len(todo) == 0:
