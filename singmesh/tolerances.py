@@ -255,6 +255,11 @@ SINGULAR_FLAT_RCOND = 1e-6
 #: last bits, so it stops and the slow starts go on alone.
 NEWTON_STILL = 4 * 2.0 ** -52
 
+#: A Gauss-Newton coordinate below this fraction of the point's largest is
+#: a root at 0 seen through rounding (far below the point's ulp): it is set
+#: to 0, where the steps take it (by eps per step, then underflow) anyway.
+NEWTON_ZERO = 1e-30
+
 #: A singular point is accepted with a relative residual below this (or
 #: below what the input's rounding allows, whichever is larger).
 SINGULAR_RESIDUAL = 1e-12
