@@ -34,11 +34,40 @@ def empty_boxes(tensors: np.ndarray) -> np.ndarray:
     F may vanish up to rounding, e.g. exactly at a corner: pruning such a
     box would leave a hole in the faces that carry the events found there.
     """
-    flat = tensors.reshape(len(tensors), -1)
+    # F of both signs at the corners: not empty, without the pass over all
+    # coefficients (half of a subdivision's children meet the surface, and
+    # nearly all of those cross it between two corners).
+    out = np.zeros(len(tensors), bool)
+    rest = np.flatnonzero(~mixed_corners(tensors))
+    if len(rest) == 0:
+        return out
+    flat = tensors[rest].reshape(len(rest), -1)
     lo, hi = flat.min(axis=1), flat.max(axis=1)
     # max |c| is max(hi, -lo) to the bit: no pass over |flat|.
     slack = tol.PRUNE_SLACK * np.maximum(hi, -lo)
-    return (lo > slack) | (hi < -slack)
+    out[rest] = (lo > slack) | (hi < -slack)
+    return out
+
+
+def mixed_corners(tensors: np.ndarray) -> np.ndarray:
+    """Boxes whose Bernstein coefficients at the box's corners (F's values
+    there) take both strict signs.
+
+    Then the least coefficient is below 0 and the largest above 0: F
+    vanishes on the box, and a test of the coefficients against a slack of
+    at least 0 passes or fails as on all of them, read from 8 coefficients
+    per box instead of all.
+
+    Returns
+    -------
+    (N,) bool
+    """
+    # The corners laid out as rows of all boxes (8, N): the signs are then
+    # whole-row comparisons, not a reduction call per box of 8 values.
+    ends = (slice(None),) + tuple(slice(None, None, max(n - 1, 1)) for n in tensors.shape[1:])
+    corners = int(np.prod([min(n, 2) for n in tensors.shape[1:]]))
+    rows = tensors[ends].reshape(len(tensors), corners).T
+    return (rows < 0).any(axis=0) & (rows > 0).any(axis=0)
 
 
 def face_without_loops(face: np.ndarray) -> np.ndarray:
@@ -67,7 +96,16 @@ def monotone_axis(tensors: np.ndarray) -> np.ndarray:
         # Each axis only on the boxes no earlier axis passed.
         t = tensors if len(todo) == len(tensors) else tensors[todo]
         ok = sign_definite(derivative(t, a), (1, 2, 3))
-        ok[ok] = face_without_loops(np.take(t[ok], 0, axis=1 + a)) & face_without_loops(np.take(t[ok], -1, axis=1 + a))
+        k = np.flatnonzero(ok)
+        if len(k):
+            # Both end faces normal to a of the boxes that passed, gathered
+            # at once as (K, 2, u, v) (not each box's whole tensor, twice),
+            # and tested in one call.
+            index = [k[:, None], slice(None), slice(None), slice(None)]
+            index[1 + a] = np.array([0, tensors.shape[1 + a] - 1])
+            ends = t[tuple(index)]
+            loopless = face_without_loops(ends.reshape((2 * len(k),) + ends.shape[2:])).reshape(len(k), 2)
+            ok[k] = loopless[:, 0] & loopless[:, 1]
         result[todo[ok]] = a
         todo = todo[~ok]
         if len(todo) == 0:

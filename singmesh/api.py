@@ -368,9 +368,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # the mesh does not use them, so they are found when first asked for.
     node_level = min(fine_level, tol.SKELETON_NODE_LEVEL)
     singular = []
+    # Each point's first vertex, from one pass over the keys (not a pass per point).
+    at = np.flatnonzero(np.isin(vkeys, point_key(np.arange(len(points)))))
+    first: dict = {}
+    for j, k in zip(at.tolist(), vkeys[at].tolist()):
+        first.setdefault(k, j)
     for i, sp in enumerate(points):
-        where = np.nonzero(vkeys == point_key(i))[0]
-        singular.append(replace(sp, vertex=int(where[0]) if len(where) else None,
+        singular.append(replace(sp, vertex=first.get(point_key(i)),
                                 branches=branches.get(i, 0), classification=kinds[i]))
     curve_list, special = curve_records(curves, vkeys, key0)
     stats = {

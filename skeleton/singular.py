@@ -170,10 +170,18 @@ def gauss_newton(surface: Surface, x: np.ndarray, iterations: int = 40,
         if max_step is not None:
             length = np.linalg.norm(step, axis=1, keepdims=True)
             step = step * np.minimum(1.0, max_step / np.maximum(length, 1e-300))
-        x[live] = y - step
+        new = y - step
+        # A coordinate of a root at 0 (a point on a symmetry plane) falls by
+        # about eps per step (the rounding of the others' residuals): Barth's
+        # nodes at (-1, 0, 0) went 1e-24, 1e-55, ... and reached 0 by
+        # underflow 20 steps later.  Below NEWTON_ZERO of the point's
+        # largest coordinate it is that 0 now.
+        tiny = np.abs(new) <= tol.NEWTON_ZERO * np.abs(new).max(axis=1, keepdims=True)
+        new[tiny] = 0.0
+        x[live] = new
         # Converged: each coordinate's step is below a few of its ulps.  A
-        # coordinate going to 0 (a point on a symmetry plane) goes on until
-        # it is 0; NaN steps stay live and stay NaN, as before.
+        # coordinate going to 0 goes on until it is 0; NaN steps stay live
+        # and stay NaN, as before.
         moving = ~np.all(np.abs(step) <= tol.NEWTON_STILL * np.abs(y), axis=1)
         live = live[moving & finite]
     return x

@@ -107,3 +107,35 @@ def test_simplicity_axis_is_the_first_that_passes():
                 break
     assert np.array_equal(got, want)
     assert {0, 1, 2, -1} <= set(want.tolist())  # every outcome is exercised
+
+
+def test_mixed_corners_and_empty_boxes_against_all_coefficients():
+    """empty_boxes reads the corners first (mixed_corners: F of both strict
+    signs there, so not empty) and all coefficients only for the others:
+    the same answers as the test on all coefficients, on random stacks,
+    stacks with zeros at corners or everywhere, a degree 0 axis, and none."""
+    from singmesh import tolerances as tol
+    from singmesh.boxes.polynomial_bounds import empty_boxes, mixed_corners
+
+    def reference(t):
+        flat = t.reshape(len(t), int(np.prod(t.shape[1:])))
+        lo, hi = flat.min(axis=1, initial=np.inf), flat.max(axis=1, initial=-np.inf)
+        slack = tol.PRUNE_SLACK * np.maximum(hi, -lo)
+        return (lo > slack) | (hi < -slack)
+
+    def corners(t):
+        c = np.array([t[:, i, j, k] for i in {0, t.shape[1] - 1} for j in {0, t.shape[2] - 1}
+                      for k in {0, t.shape[3] - 1}])
+        return (c < 0).any(axis=0) & (c > 0).any(axis=0)
+
+    rng = np.random.default_rng(5)
+    stacks = [rng.normal(size=(500, 5, 5, 5)) + rng.choice([0.0, 3.0, -3.0], size=(500, 1, 1, 1)),
+              rng.normal(size=(200, 1, 3, 2)) + 1.5, rng.normal(size=(100, 4, 2, 6)), np.zeros((3, 5, 5, 5)),
+              np.zeros((0, 5, 5, 5))]
+    z = rng.normal(size=(300, 5, 5, 5)) + 2.0
+    z[:, ::4, ::4, ::4] = rng.choice([0.0, -0.0, 1.0, -1e-17], size=(300, 2, 2, 2))
+    stacks.append(z)
+    for t in stacks:
+        assert np.array_equal(mixed_corners(t), corners(t))
+        assert np.array_equal(empty_boxes(t), reference(t))
+    assert mixed_corners(stacks[0]).any() and empty_boxes(stacks[0]).any() and not empty_boxes(stacks[0]).all()

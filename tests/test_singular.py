@@ -205,6 +205,28 @@ def test_newton_converges_on_degenerate_points():
     assert pts[0].hessian_rank == 2
 
 
+def test_gauss_newton_puts_a_node_on_a_symmetry_plane_onto_it_at_once():
+    """A start next to Barth's node (-1, 0, 0): the coordinates going to 0
+    fall by about eps per step (the rounding of the other residuals) and
+    reached 0 by underflow some 20 steps later; now they are 0 once below
+    NEWTON_ZERO of the point.  The node is the same (checked against the
+    exact node and against the 40-step result), and a node off every
+    plane (a float-rotated cone's apex) is left as Newton puts it."""
+    from singmesh.skeleton.singular import gauss_newton
+
+    s = Surface.parse("4 (t^2 x^2 - y^2)(t^2 y^2 - z^2)(t^2 z^2 - x^2) - (1 + 2 t)(x^2 + y^2 + z^2 - 1)^2;"
+                      " t = (1 + sqrt(5))/2;")
+    h = 4 / 256
+    starts = np.array([[-1 - h / 2, h / 2, h / 2], [-1 + h / 2, h / 2, -h / 2], [h / 2, 1 - h / 2, -h / 2]])
+    want = np.array([[-1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    assert np.array_equal(gauss_newton(s, starts, iterations=6), want)
+    assert np.array_equal(gauss_newton(s, starts, iterations=40), want)
+    expr, shift = rotated("x^2 + y^2 - z^2", 5)
+    cone = Surface.parse(expr)
+    x = gauss_newton(cone, np.array([shift]) + 1e-3)
+    assert np.abs(x - shift).max() <= 1e-12 and (np.abs(x) > 1e-3).all()
+
+
 def test_classification_reported():
     m = singmesh.mesh("y x^2 - y^3 - z^2", BOX1)
     (s,) = m.singularities
