@@ -249,7 +249,8 @@ def coarsen_faces(vertices: np.ndarray, faces: np.ndarray, keep: np.ndarray, cha
     for cleanup in (False, True):
         failed = np.zeros(0, np.int64)  # keys u * n + v of collapses found invalid
         changed = np.ones(n, bool)
-        for _ in range(tol.COARSEN_CLEANUP if cleanup else rounds):
+        pending = np.zeros(n, bool)
+        for rnd in range(tol.COARSEN_CLEANUP if cleanup else rounds):
             movable = active
             if cleanup:
                 thin = _max_cos(V[T]) > cos_floor
@@ -279,8 +280,8 @@ def coarsen_faces(vertices: np.ndarray, faces: np.ndarray, keep: np.ndarray, cha
             o = np.where(cu[on, 0] == v[on], cu[on, 1], cu[on, 0])
             d = V[o] - V[v[on]]
             length[on] = _dot(d, d)
-            # Each u's edges, shortest first (one sort of u + length / 2 max).
-            order = np.argsort(u + length / (2 * length.max()), kind="stable")
+            # Each u's edges, shortest first.
+            order = _order(u, (length * ((1 << 20) - 1) / length.max()).astype(np.int64), 20)
             u, v, length = u[order], v[order], length[order]
             # Priority: shorter first by factors of sqrt(2), and within those in
             # an order that is random-like in space (hashed vertex numbers: a
@@ -338,9 +339,33 @@ def coarsen_faces(vertices: np.ndarray, faces: np.ndarray, keep: np.ndarray, cha
                     break
                 continue
             T, ref, chain = _apply(T, ref, chain, cu, cv, n)
-            T, ref, flipped = _flip(V, T, ref, chain, max_edge, cos_bend, changed)
-            changed[flipped] = True
+            pending |= changed
+            if rnd % 2 or cleanup:
+                T, ref, flipped = _flip(V, T, ref, chain, max_edge, cos_bend, pending)
+                changed[flipped] = True
+                pending[:] = False
     return np.concatenate([rest, T]), chain
+
+
+def _order(major: np.ndarray, minor: np.ndarray | None = None, minor_bits: int = 0) -> np.ndarray:
+    """The stable sorting permutation by (major, minor) of non-negative integers.
+
+    One sort of int64 keys with the position in the low bits where they
+    fit (numpy sorts int64 several times faster than it argsorts stably).
+    """
+    m = len(major)
+    if not m:
+        return np.zeros(0, np.int64)
+    pos_bits = max(int(m).bit_length(), 1)
+    if int(major.max()).bit_length() + minor_bits + pos_bits <= 62:
+        key = major.astype(np.int64) << (minor_bits + pos_bits)
+        if minor is not None:
+            key |= minor << pos_bits
+        key |= np.arange(m)
+        return np.sort(key) & ((1 << pos_bits) - 1)
+    if minor is None:
+        return np.argsort(major, kind="stable")
+    return np.lexsort((minor, major))
 
 
 class _Mesh:
@@ -356,8 +381,8 @@ class _Mesh:
         self.src, self.dst = a, b
         self.keys = np.sort(np.concatenate([a * n + b, b * n + a]))
         self.nb = self.keys % n
-        self.nb_ptr = np.searchsorted(self.keys, np.arange(n + 1) * n)
-        order = np.argsort(a, kind="stable")
+        self.nb_ptr = np.concatenate([[0], np.cumsum(np.bincount(a, minlength=n) + np.bincount(b, minlength=n))])
+        order = _order(a)
         self.tri_ptr = np.concatenate([[0], np.cumsum(np.bincount(a, minlength=n))])
         self.tri = order // 3
 
@@ -416,14 +441,17 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _max_cos(p: np.ndarray) -> np.ndarray:
-    """Cosine of the smallest angle of triangles p (k, 3, 3); 1 for degenerate ones."""
-    e = [p[:, (i + 1) % 3] - p[:, i] for i in range(3)]
-    sq = [_dot(x, x) for x in e]
-    out = np.full(len(p), -1.0)
+    """Cosine of the smallest angle of triangles p (k, 3, 3); 1 for degenerate ones.
+
+    The smallest angle is the one opposite the shortest edge c: by the law
+    of cosines (a^2 + b^2 - c^2) / 2ab.
+    """
+    sq = np.stack([_dot(x, x) for x in (p[:, 1] - p[:, 0], p[:, 2] - p[:, 1], p[:, 0] - p[:, 2])])
+    c2 = sq.min(axis=0)
+    total = sq.sum(axis=0)
     with np.errstate(all="ignore"):
-        for i in range(3):
-            c = -_dot(e[i], e[(i + 2) % 3]) / np.sqrt(sq[i] * sq[(i + 2) % 3])
-            out = np.maximum(out, np.nan_to_num(c, nan=1.0))
+        out = (total - 2 * c2) / (2 * np.sqrt((sq[0] * sq[1] * sq[2]) / c2))
+    out[~(out <= 1.0)] = 1.0
     return out
 
 
@@ -549,7 +577,7 @@ def _flip(V, T, ref, chain, max_edge, cos_bend, at):
     n = len(V)
     half = S[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
     key = np.minimum(half[:, 0], half[:, 1]) * n + np.maximum(half[:, 0], half[:, 1])
-    order = np.argsort(key, kind="stable")
+    order = _order(key)
     ks = key[order]
     same = np.nonzero(ks[1:] == ks[:-1])[0]
     # Edges with exactly two triangles.
