@@ -348,12 +348,12 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     if specks.any():
         vertices, faces, vkeys, *grad = without_faces(vertices, faces, specks, vkeys, *grad)
     if len(creases.points) and len(faces):
-        # The fine triangles of the crease tubes, on flat faces and along
-        # straight creases, merged up to the size of the coarse lattice's.
+        # The fine triangles of the crease tubes merged up to the size of
+        # the coarse lattice's.
         coarse_cell = float(np.max(b[:, 1] - b[:, 0])) / (1 << coarse_level)
         vertices, faces, vkeys, grad, curves = coarsen_crease_mesh(
             vertices, faces, vkeys, grad, curves, key0, point_key(np.arange(len(points))), b,
-            tol.COARSEN_EDGE * coarse_cell)
+            tol.COARSEN_EDGE * coarse_cell, tol.COARSEN_REACH * coarse_cell)
         fixed = np.arange(key0, key0 + len(curves.points))
     t_improve = time.perf_counter()
     improved = {}

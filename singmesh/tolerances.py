@@ -785,19 +785,57 @@ CREASE_WELD = 1e-6
 #: reach, CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and some).
 CREASE_BOX_JOIN = 12.0
 
-#: Coarsening of crease meshes (facets/coarsen.py): a vertex goes where
-#: its triangles stay in their planes to this fraction of the box's size
-#: (flat faces and straight creases, float-rotated: rounding is ~1e-16;
-#: the sagitta of a chord of a cell on a curved crease is ~1e-5), ...
+#: Coarsening of crease meshes (facets/coarsen.py): vertices within this
+#: many coarse cells of a crease vertex can go (the fine triangles of a
+#: tube and the finer leaves round it reach ~20 fine cells from the crease
+#: at coarse 32, fine 256: 2.5 coarse cells); ...
+COARSEN_REACH = 3.0
+#: ... and the vertices whose neighbours are all within this fraction of
+#: the box's size of the plane of one of their triangles (a flat face,
+#: float-rotated: rounding is ~1e-16; far from the tubes, such a face can
+#: be meshed on the fine lattice where bounds of F are loose), ...
 COARSEN_FLAT = 1e-10
+#: ... a new triangle turns at most this many degrees from the surface's
+#: normal at the fine triangle it descends from (the normals at a
+#: triangle's corners differ by its size over the radius of curvature: 12
+#: degrees for a coarse cell's diagonal on a sphere of 7 coarse cells'
+#: radius, where the coarse lattice's own triangles do), and a new chord along a
+#: crease is as close to it as one of ``max_edge`` whose ends turn this
+#: much (on a flat face and a straight crease nothing turns), ...
+COARSEN_BEND = 12.0
 #: ... and no new triangle has an angle below this many degrees (or below
-#: the smallest of the triangles it replaces), ...
-COARSEN_ANGLE = 10.0
+#: the smallest of the triangles it replaces; 14, not the quality judge's
+#: 10: a margin for triangles left beside a short chord; the cube's
+#: smallest was 13.7 before), ...
+COARSEN_ANGLE = 14.0
+#: ... (the smallest of those it replaces times this: rounding, and slivers
+#: in clusters made a hair thinner by the collapse of a neighbour), ...
+COARSEN_ANGLE_SLACK = 0.99
+#: ... or as a needle: its shortest edge at most this fraction of the next
+#: (collapsed next: three vertices much closer than a cell go in two
+#: collapses, the first of which leaves a needle), with no angle below
+#: COARSEN_NEEDLE degrees, ...
+COARSEN_NEEDLE_EDGE = 0.25
+COARSEN_NEEDLE = 1.0
+#: ... or with an edge shorter than this fraction of ``max_edge`` (of any
+#: shape: crossings of the surface with the lattice clustered at a
+#: lattice point, 1e-5 of a cell apart, go one by one), ...
+COARSEN_TINY = 1e-3
 #: ... nor an edge longer than this many coarse cells (the largest
 #: triangles of the coarse lattice elsewhere: a cell's face diagonal).
 COARSEN_EDGE = 1.4142135623730951
-#: ... trying the shortest this many edges of each vertex.
-COARSEN_TRIES = 2
+#: ... (this many times longer where a triangle thinner than COARSEN_ANGLE
+#: goes, or an edge a quarter of the longest: a sliver between triangles of
+#: the full size on a cube's face, the last short chord of a crease).
+COARSEN_EDGE_SLIVER = 1.25
+#: Flips after the collapses of a round: of the edges of triangles with an
+#: angle below this many degrees (flips of better ones gain little).
+COARSEN_FLIP_BELOW = 35.0
+#: Rounds after the others for the triangles still thinner than
+#: COARSEN_ANGLE (a needle whose collapse was not valid).
+COARSEN_CLEANUP = 6
+#: Passes of choosing collapses that conflict with none chosen, in a round.
+COARSEN_PASSES = 6
 
 #: Curvature (singmesh.curvature): grad F is zero at a point, and the
 #: curvature undefined (NaN), when |grad F| is below this fraction of the
