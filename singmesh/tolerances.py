@@ -395,6 +395,13 @@ CURVE_TRACE_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
 #: fuzz s1-638's double curve pass within a step, which the shorter steps
 #: followed past each other instead of meeting).
 CURVE_TURN_RANK = 0.2
+#: A trace step is taken only where the curve it lands on runs within
+#: 60 degrees of the step (|cos| at least this), where that can be read
+#: (two sheets crossing): a step that lands on another curve passing
+#: near the predicted point runs across it (fuzz s1-270, the double curve
+#: through a cone's apex).  A turn of 60 degrees within one step is taken
+#: with a shorter one.
+CURVE_TRACE_ALONG = 0.5
 
 #: A trace closes back at its start only after this many steps' length
 #: (four full steps, as before the shorter steps of CURVE_TRACE_SCALES,

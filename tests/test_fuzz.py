@@ -736,3 +736,35 @@ def test_non_simple_germ_at_the_defaults_is_one_point(name, text, seed, shift):
     assert s.classification.name == "non-simple"
     assert np.linalg.norm(np.asarray(s.point) - apex) <= 1e-12
     assert s.vertex is not None
+
+
+@pytest.mark.parametrize("name, text, apex", APEX_ON_CURVES[:2], ids=[c[0] for c in APEX_ON_CURVES[:2]])
+def test_curve_edges_follow_the_curve(name, text, apex):
+    """Every edge of the traced curves runs along the curve f1 = f2 = 0 at
+    its ends (its tangent grad f1 x grad f2, from the factors here), away
+    from the apex where grad f2 vanishes.  On main s1-270's loop, whose two
+    branches meet tangentially at the apex, was stepped past it onto the
+    double curve crossing there: vertices on that curve, joined to the
+    loop by edges across it."""
+    import singmesh
+
+    case = fc.case_from_text(name, text, ((-1.0, 1.0),) * 3)
+    f1, f2 = (fc.Field(f) for f in case.factors)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = singmesh.mesh(text, ((-1.0, 1.0),) * 3, coarse=8, fine=64)
+    assert m.singular_curves
+    cell = 2.0 / 64
+    worst = 1.0
+    for c in m.singular_curves:
+        p = np.asarray(c.points)
+        e = np.diff(p, axis=0)
+        e /= np.linalg.norm(e, axis=1, keepdims=True)
+        for end, ends in ((e, p[:-1]), (e, p[1:])):
+            t = np.cross(f1.grad(ends), f2.grad(ends))
+            # Off the apex by a cell's fraction: the tangent is read there.
+            keep = np.linalg.norm(ends - np.asarray(apex), axis=1) > 0.1 * cell
+            t = t[keep] / np.linalg.norm(t[keep], axis=1, keepdims=True)
+            if len(t):
+                worst = min(worst, float(np.abs(np.einsum("ij,ij->i", end[keep], t)).min()))
+    assert worst >= 0.9, f"a curve edge {np.degrees(np.arccos(worst)):.0f} degrees off the curve's tangent"
