@@ -162,6 +162,16 @@ STAR_MAX_RAISE = 4
 #: The fine level is doubled until they are this far apart ...
 CREASE_MIN_GAP = 12.0
 
+#: Singular curves closer than CREASE_MIN_GAP cells share a tube too (the
+#: hyperbola's two branches 10.3 cells apart, fuzz s2-126: the sheets
+#: between them lost where the tubes merge); the fine level is doubled
+#: for them CURVE_GAP_MAX_RAISE times at most, and only where that parts
+#: them (a gap of at least CURVE_GAP_LEAST cells): branches meeting
+#: tangentially come arbitrarily close (s1-270's loop at a cone's apex),
+#: and the lattice would only grow.
+CURVE_GAP_MAX_RAISE = 1
+CURVE_GAP_LEAST = CREASE_MIN_GAP / 2
+
 #: ... at most this many levels (8 times finer); closer creases keep the
 #: lattice and the gap is reported in Mesh.stats.
 CREASE_MAX_RAISE = 3

@@ -768,3 +768,44 @@ def test_curve_edges_follow_the_curve(name, text, apex):
             if len(t):
                 worst = min(worst, float(np.abs(np.einsum("ij,ij->i", end[keep], t)).min()))
     assert worst >= 0.9, f"a curve edge {np.degrees(np.arccos(worst)):.0f} degrees off the curve's tangent"
+
+
+#: s2-126's factors: a plane and a quadric meeting along a hyperbola whose
+#: two branches pass 10.3 fine cells apart (fine 64), one of them an arc
+#: 1.6 cells deep from the face x = 1 back to it.
+S2_126 = ("7/5*z + 3*y - 3/4*x", "-3/7*z^2 - 4/5*x*z + 1/5*x^2 - 6/5*y - 1/8*x + 1/5")
+CLOSE_BRANCHES = [
+    ("s2-126", "*".join(f"({f})" for f in S2_126)),
+    ("s2-126 turned", _tilted_product(S2_126, (1, -2, 1), 0.05, (0.9, 0.35, -0.25), (-0.01, 0.02, 0.01))),
+]
+
+
+@pytest.mark.parametrize("name, text", CLOSE_BRANCHES, ids=[c[0] for c in CLOSE_BRANCHES])
+def test_close_branches_of_a_double_curve(name, text):
+    """Two branches of the double curve closer than two tubes' width: the
+    sheets between them are meshed (no open edge inside the box, no edge
+    of three triangles), and every point of f1 = f2 = 0 found here by
+    Newton on the factors lies on edges of four triangles.  On main the
+    tubes merged between the branches: the arc's 7 edges nearest the
+    other branch had no triangle (line cells), the other's 2."""
+    import meshcheck as mc
+    import singmesh
+    from scipy.spatial import cKDTree
+
+    box = ((-1.0, 1.0),) * 3
+    case = fc.case_from_text(name, text, box)
+    b = case.box_array()
+    arc = _common_zeros(*(fc.Field(f) for f in case.factors), b)
+    assert len(arc) >= 20
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = singmesh.mesh(text, box, coarse=8, fine=64)
+    V = np.asarray(m.vertices)
+    counts = mc.edge_counts(m.faces)
+    assert not [e for e, k in counts.items() if k not in (2, 4) and not (k == 1 and mc._same_box_face(V[e[0]], V[e[1]], b))]
+    four = np.array([e for e, k in counts.items() if k == 4])
+    on = np.concatenate([V[four[:, 0]], V[four[:, 1]], 0.5 * (V[four[:, 0]] + V[four[:, 1]])])
+    cell = 2.0 / m.stats["fine"]
+    far = cKDTree(on).query(arc)[0]
+    assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
+    assert fc.judge(case, 8, 64).status == "clean"
