@@ -24,9 +24,7 @@ SAMPLE_SIZE = 100
 #: Cases of the sample the mesher still gets wrong, by name: what the judge
 #: finds.  Strict: each is judged, and one that comes out clean fails the
 #: test until it is removed from here.
-KNOWN = {
-    "s2-66-product-unit": "edges with six triangles near f1's singular point at the origin",
-}
+KNOWN: dict[str, str] = {}
 
 
 def _rotated(text: str, seed: int, shift) -> str:
@@ -810,3 +808,45 @@ def test_close_branches_of_a_double_curve(name, text):
     far = cKDTree(on).query(arc)[0]
     assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
     assert fc.judge(case, 8, 64).status == "clean"
+
+
+#: s2-66's factors: a cubic with a singular point at the origin (quadratic
+#: part x (3 z - 5 y), an A2 point) and a plane 0.033 above it, tangent to
+#: the cubic there: four branches of the double curve from that crossing,
+#: 1.3 fine cells (fine 64) from the cubic's singular point.
+S2_66 = ("4*y^2*z + 8/7*x*y*z - 2/3*x^2*y + 3*x*z - 5*x*y", "6*z - 1/7*y + 4/7*x - 1/5")
+CROSSING_BESIDE_A_POINT = [
+    ("s2-66", "*".join(f"({f})" for f in S2_66)),
+    ("s2-66 turned", _tilted_product(S2_66, (2, 1, -1), 0.2, (0.0, 0.0, 0.0), (0.03, -0.02, 0.01))),
+]
+
+
+@pytest.mark.parametrize("name, text", CROSSING_BESIDE_A_POINT, ids=[c[0] for c in CROSSING_BESIDE_A_POINT])
+def test_crossing_of_curves_beside_a_singular_point(name, text):
+    """Each curve edge has four triangles (two sheets crossing) and every
+    other edge inside the box two; the points of f1 = f2 = 0 found here by
+    Newton on the factors lie on edges of four.  On main the rails round
+    the crossing, ten cells out on sheets bent by the cubic's singular
+    point, went out along a third branch and back: edges of six."""
+    import meshcheck as mc
+    import singmesh
+    from scipy.spatial import cKDTree
+
+    box = ((-1.0, 1.0),) * 3
+    case = fc.case_from_text(name, text, box)
+    b = case.box_array()
+    curve = _common_zeros(*(fc.Field(f) for f in case.factors), b)
+    assert len(curve) >= 20
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = singmesh.mesh(text, box, coarse=8, fine=64)
+    V = np.asarray(m.vertices)
+    counts = mc.edge_counts(m.faces)
+    wrong = [(k, V[e[0]].round(3).tolist()) for e, k in counts.items()
+             if k not in (2, 4) and not (k == 1 and mc._same_box_face(V[e[0]], V[e[1]], b))]
+    assert not wrong, wrong[:5]
+    four = np.array([e for e, k in counts.items() if k == 4])
+    on = np.concatenate([V[four[:, 0]], V[four[:, 1]], 0.5 * (V[four[:, 0]] + V[four[:, 1]])])
+    cell = 2.0 / m.stats["fine"]
+    far = cKDTree(on).query(curve)[0]
+    assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
