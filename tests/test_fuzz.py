@@ -850,3 +850,31 @@ def test_crossing_of_curves_beside_a_singular_point(name, text):
     cell = 2.0 / m.stats["fine"]
     far = cKDTree(on).query(curve)[0]
     assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
+
+
+#: Failures of ``benchmarks/fuzz.py`` not fixed yet (seed, index, what is
+#: wrong): strict, so that a fixed one shows.
+OPEN_CASES = [
+    (1, 270, "the loop of f1 = f2 = 0 has a cusp at the cubic cone's apex, where the double curve through it "
+             "crosses: the loop's half-sheets are also that curve's, and their rails snap to it (open edges)"),
+    (3, 2, "a trace lost ('end of the trace'): open edges, edges of three triangles near the curve"),
+    (3, 234, "a double curve within 3 cells of a face, leaving it at 8 degrees: edges of six triangles"),
+    (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
+    (3, 410, "a double curve within 3 cells of a face for half its length: edges of six triangles"),
+    (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
+    (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
+    (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
+    (3, 600, "open edges on a sheet by a non-simple point (no curve)"),
+    (3, 726, "two planes crossing along a line 0-3.3 cells inside the face x = -1 (5.7 degrees off it): "
+             "edges of six triangles"),
+    (3, 818, "a double curve within 3 cells of a face: edges of three and five triangles"),
+    (3, 925, "a cuspidal edge: the mesh is refused as empty (F and grad F vanish to rounding on more than points)"),
+    (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
+]
+
+
+@pytest.mark.xfail(strict=True, reason="fuzz cases not fixed yet (OPEN_CASES)")
+@pytest.mark.parametrize("seed, index, what", OPEN_CASES, ids=[f"s{s}-{i}" for s, i, _ in OPEN_CASES])
+def test_open_fuzz_case(seed, index, what):
+    v = fc.judge(fc.make_case(seed, index), 8, 64)
+    assert v.status in ("clean", "empty"), f"{what}: {v.detail}"
