@@ -870,6 +870,15 @@ OPEN_CASES = [
     (3, 818, "a double curve within 3 cells of a face: edges of three and five triangles"),
     (3, 925, "a cuspidal edge: the mesh is refused as empty (F and grad F vanish to rounding on more than points)"),
     (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
+    (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
+            "four only on a product's curve; maybe its limit, not checked)"),
+    (4, 36, "a quadric: open edges on a sheet at the origin"),
+    (4, 206, "a plane and a cubic: non-manifold edges"),
+    (4, 210, "an edge of six triangles on the double curve"),
+    (4, 426, "36 edges of six triangles near the face z = 1"),
+    (4, 498, "two close vertices and open edges where the double curve nears the box's edge x = 1, y = -1"),
+    (4, 542, "91 edges of three triangles"),
+    (4, 850, "non-manifold edges in a random box"),
 ]
 
 
