@@ -545,6 +545,8 @@ def strip_triangles(rail_list, event_points: np.ndarray, event_keys: np.ndarray,
                 events, r, snap = np.roll(events, -k0), np.roll(r, -k0, axis=0), np.roll(snap, -k0)
             snap = _steady_snaps(snap, steady, g, closed)
         snap = _no_zigzags(snap, g, turns)
+        if not closed:
+            snap = _no_excursions(snap, g, turns)
         m = len(events)
         steps = m if closed else m - 1
         zipped = set()  # the curve edges this rail's strip reaches
@@ -747,6 +749,54 @@ def _no_zigzags(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = None) 
         cur, came_from = s, int(path[-2])
         i += 1
     return snap
+
+
+def _no_excursions(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = None) -> np.ndarray:
+    """An open rail's snaps without its excursions, through a crossing of curves, out along a branch and back.
+
+    A rail on the ball round a crossing of curves runs ten cells or so
+    from them, where the nearest curve vertex need not be on a branch its
+    half-sheet bounds: beside f1's singular point a cell from the crossing
+    of fuzz s2-66 a sheet's rail went from one branch past the crossing
+    out along a third branch and back, then onto a fourth and back, before
+    the branch it ends along (those edges zipped twice by one half-sheet:
+    six triangles).  The walk over the curve graph that the snaps make is
+    reduced (each step straight back along the edge just walked cancels
+    it) and every event snapped to the vertex of the reduced walk it was
+    on.  Only for rails whose walk passes a vertex where curves meet (three
+    or more edges), and not where a cancelled stretch reaches a turn
+    (``turns``: round a pinch point a rail comes back along the curve)
+    or a curve's end.
+    """
+    snap = np.asarray(snap)
+    if len(snap) < 3:
+        return snap
+    walk, at = [int(snap[0])], [0]
+    for s in snap[1:].tolist():
+        cur = walk[-1]
+        if s != cur:
+            try:
+                path = nx.shortest_path(g, cur, s, weight="weight")
+            except nx.NetworkXNoPath:
+                return snap
+            walk += path[1:]
+        at.append(len(walk) - 1)
+    if not any(g.degree(v) >= 3 for v in walk):
+        return snap
+    stack, depth, cancelled = [], [], []
+    for v in walk:
+        if len(stack) >= 2 and stack[-2] == v:
+            cancelled.append(stack.pop())
+        else:
+            stack.append(v)
+        depth.append(len(stack))
+    if not cancelled:
+        return snap
+    if any(g.degree(v) <= 1 or (turns is not None and turns[v]) for v in cancelled):
+        return snap
+    # An event keeps the part of its stack that is never popped after it.
+    lowest = np.minimum.accumulate(np.asarray(depth)[::-1])[::-1]
+    return np.array([stack[int(lowest[k]) - 1] for k in at], dtype=snap.dtype)
 
 
 def _chain_on_faces(rail_list, event_points: np.ndarray, ends: np.ndarray, reach: float, box: np.ndarray,

@@ -116,7 +116,8 @@ def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve
         times; where two creases (sharp edges) are closer than
         ``CREASE_MIN_GAP`` such boxes, the same, at most
         ``CREASE_MAX_RAISE`` times (``Mesh.stats["crease_gap"]``: their
-        distance in boxes at the level used);
+        distance in boxes at the level used); where two singular curves
+        are closer than that, once, if once parts them;
         ``Mesh.stats["fine"]`` is the value used.
     improve : bool
         Make the triangles well-shaped (:mod:`singmesh.facets.improve`):
@@ -222,6 +223,17 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     gap = crease_gap(creases, b, fine_level)
     raised = _fine_for_creases(gap, fine_level)
     gap_asked = (gap, fine_level) if raised > fine_level else None  # for a refusal's message
+    # Two singular curves (or two stretches of one) closer than two tubes'
+    # width share one tube, and the sheets between them have no rail there
+    # (the two branches of a hyperbola 10 cells apart: fuzz s2-126): the
+    # same, once.
+    curve_gap = crease_gap(curves, b, fine_level)
+    if _fine_for_curves(curve_gap, fine_level) > raised:
+        raised = _fine_for_curves(curve_gap, fine_level)
+        gap_asked = None
+        curve_gap_asked = (curve_gap, fine_level)
+    else:
+        curve_gap_asked = None
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -278,6 +290,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             if gap_asked[0] < 1:
                 why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
                         "are creases 0 apart)")
+        elif curve_gap_asked is not None:
+            why = f"singular curves {curve_gap_asked[0]:.3g} fine cells apart at fine {1 << curve_gap_asked[1]}"
         else:
             why = "crease strips that failed on the coarser lattices"
         raise MemoryBudgetError(f"{e}; fine was raised from {1 << asked} to {1 << fine_level} for {why}") from None
@@ -546,6 +560,20 @@ def _fine_for_creases(gap: float, fine_level: int) -> int:
         return fine_level
     more = int(np.ceil(np.log2(tol.CREASE_MIN_GAP / max(gap, 1e-300))))
     return min(fine_level + min(more, tol.CREASE_MAX_RAISE), tol.MAX_LEVEL)
+
+
+def _fine_for_curves(gap: float, fine_level: int) -> int:
+    """The fine level at which singular curves ``gap`` fine cells apart are ``CREASE_MIN_GAP`` cells apart.
+
+    Only where one level does it (``gap`` at least ``CURVE_GAP_LEAST``):
+    branches that meet tangentially (a loop of the double curve with a
+    cusp at a cone's apex, fuzz s1-270) come arbitrarily close, and no
+    level parts them.  At most ``MAX_LEVEL``.
+    """
+    if not tol.CURVE_GAP_LEAST <= gap < tol.CREASE_MIN_GAP:
+        return fine_level
+    more = int(np.ceil(np.log2(tol.CREASE_MIN_GAP / gap)))
+    return min(fine_level + min(more, tol.CURVE_GAP_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _fine_for_points(points: np.ndarray, box: np.ndarray, fine_level: int) -> int:

@@ -162,6 +162,16 @@ STAR_MAX_RAISE = 4
 #: The fine level is doubled until they are this far apart ...
 CREASE_MIN_GAP = 12.0
 
+#: Singular curves closer than CREASE_MIN_GAP cells share a tube too (the
+#: hyperbola's two branches 10.3 cells apart, fuzz s2-126: the sheets
+#: between them lost where the tubes merge); the fine level is doubled
+#: for them CURVE_GAP_MAX_RAISE times at most, and only where that parts
+#: them (a gap of at least CURVE_GAP_LEAST cells): branches meeting
+#: tangentially come arbitrarily close (s1-270's loop at a cone's apex),
+#: and the lattice would only grow.
+CURVE_GAP_MAX_RAISE = 1
+CURVE_GAP_LEAST = CREASE_MIN_GAP / 2
+
 #: ... at most this many levels (8 times finer); closer creases keep the
 #: lattice and the gap is reported in Mesh.stats.
 CREASE_MAX_RAISE = 3
@@ -400,6 +410,13 @@ CURVE_TRACE_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
 #: fuzz s1-638's double curve pass within a step, which the shorter steps
 #: followed past each other instead of meeting).
 CURVE_TURN_RANK = 0.2
+#: A trace step is taken only where the curve it lands on runs within
+#: 60 degrees of the step (|cos| at least this), where that can be read
+#: (two sheets crossing): a step that lands on another curve passing
+#: near the predicted point runs across it (fuzz s1-270, the double curve
+#: through a cone's apex).  A turn of 60 degrees within one step is taken
+#: with a shorter one.
+CURVE_TRACE_ALONG = 0.5
 
 #: A trace closes back at its start only after this many steps' length
 #: (four full steps, as before the shorter steps of CURVE_TRACE_SCALES,

@@ -601,6 +601,24 @@ def _transversal(surface: Surface, x: np.ndarray) -> bool:
     return bool(sv[1] >= tol.CURVE_TURN_RANK * sv[0])
 
 
+def _along(surface: Surface, y: np.ndarray, t: np.ndarray) -> bool:
+    """Whether the curve through y (on the locus) runs along t, where that can be read.
+
+    Where two sheets cross transversally at y the curve's tangent is the
+    Hessian's kernel.  A step that lands where it runs across t has left
+    its curve for another one passing near the predicted point: fuzz
+    s1-270's loop, whose two branches meet tangentially at a cubic cone's
+    apex, stepped past it onto the double curve crossing there (a vertex
+    on that curve, the loop joined to it by edges along it: open edges).
+    Elsewhere (a cuspidal edge, the Hessian of rank one) there is no
+    kernel direction to compare, and the step stands.
+    """
+    _, sv, vt = np.linalg.svd(surface.hessian(y[None])[0])
+    if not sv[1] >= tol.CURVE_TURN_RANK * sv[0]:
+        return True
+    return bool(abs(np.dot(vt[2], t)) >= tol.CURVE_TRACE_ALONG)
+
+
 def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,
                    earlier: cKDTree | None = None, earlier_points: np.ndarray | None = None,
                    earlier_tangents: np.ndarray | None = None):
@@ -621,7 +639,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
                 break
             q = x + scale * h * t
             z, ok = _correct_vertex(surface, q[None], t[None], scale * h)
-            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
+            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h and _along(surface, z[0], t):
                 y = z[0]
                 break
         if y is None:

@@ -272,15 +272,7 @@ def test_cone_times_sphere_circle_along_an_edge_of_the_box():
     assert _every_curve_edge_has(m, 4) == []
 
 
-#: Raising the fine level once for curves closer than 12.5 cells (as for
-#: creases) fixed these, but put a change of type of fuzz s1-186 outside
-#: the box (a double curve nearing the z-axis's cuspidal edge): reverted.
-_MERGED_TUBES = pytest.mark.xfail(strict=True, reason="two double lines 11-12 cells apart: their tubes merge, "
-                                  "the half-sheets between them have no rail (open edges)")
-
-
-@pytest.mark.parametrize("cells, seed", [(13, 0), (13, 1)] + [
-    pytest.param(c, s, marks=_MERGED_TUBES) for c, s in [(12, 0), (12, 1), (11, 0), (11, 2)]])
+@pytest.mark.parametrize("cells, seed", [(13, 0), (13, 1), (12, 0), (12, 1), (11, 0), (11, 2)])
 def test_plane_cutting_a_thin_cylinder_in_two_close_lines(cells, seed):
     # The plane z = r/2 cuts the cylinder x^2 + z^2 = r^2 along the lines
     # x = +-r sin 60deg, 13 fine cells apart at coarse 8 / fine 64 (float
@@ -289,9 +281,10 @@ def test_plane_cutting_a_thin_cylinder_in_two_close_lines(cells, seed):
     # nearer the other for an event or two: its strip stepped from one
     # line to the other, a triangle across the gap (the class of fuzz
     # s1-614 and s1-302).  On main: 16 and 6 open edges inside the box.
-    # At 12 and 11 cells the tubes merge (the half-sheets between the
-    # lines have no rail: triangles from one line to the other, open edges
-    # inside the box): not fixed yet.
+    # At 12 and 11 cells the tubes merged (the half-sheets between the
+    # lines had no rail: triangles from one line to the other, open edges
+    # inside the box); the fine level is doubled for curves closer than
+    # CREASE_MIN_GAP cells now (api._fine_for_curves), where that parts them.
     r = cells / 32.0 / np.sqrt(3.0)
     text = float_rotated(f"(z - {r / 2:.15g}) (x^2 + z^2 - {r * r:.15g})", seed)
     m, _ = check_curve_mesh(text, BOX1, 1, half_sheets=4, coarse=8, fine=64)
