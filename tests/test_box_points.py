@@ -18,6 +18,29 @@ import singmesh
 from meshcheck import boundary_edges_off_box, fans_at, non_manifold_edges
 from oracles import branches_on_sphere
 
+
+def _nodes_right(text: str, box, expr, truth, radius: float) -> None:
+    """The mesh of ``text`` on ``box`` has no open edge inside the box, no
+    non-manifold edge, and each of the nodes ``truth`` (found without
+    singmesh) is one vertex with the fans the sphere oracle counts at
+    ``radius`` on the part of the sphere inside the box."""
+    import sympy
+
+    from singmesh.surface import X, Y, Z
+
+    m = singmesh.mesh(text, box)
+    f = sympy.lambdify((X, Y, Z), expr, "numpy")
+    lim = np.array(box, float)
+    size = float(np.max(lim[:, 1] - lim[:, 0]))
+    assert not boundary_edges_off_box(m.vertices, m.faces, box)
+    assert not non_manifold_edges(m.faces)
+    for p in truth:
+        d = np.linalg.norm(m.vertices - p, axis=1)
+        assert int((d <= 1e-9 * size).sum()) == 1, p
+        want = branches_on_sphere(lambda q: f(q[..., 0], q[..., 1], q[..., 2]), p, radius, 240, 480, box=lim)
+        assert fans_at(m.faces, int(np.argmin(d))) == want, p
+
+
 A = np.sqrt(2.5)
 
 CASES = [
@@ -98,10 +121,8 @@ def test_cones_with_the_apex_on_a_box_edge(text):
 def test_chmutov_sextic_octant():
     # T6(x) + T6(y) + T6(z) + 1 on [0, 1.25]^3 (a user's octant of a symmetric
     # surface): three of its nodes lie on the box's edges, e.g. (0, 0, 1/2).
-    import sympy
-
     from benchmarks.nodes import find_nodes
-    from singmesh.surface import Surface, X, Y, Z
+    from singmesh.surface import Surface
 
     t6 = "(32 {v}^6 - 48 {v}^4 + 18 {v}^2 - 1)"
     text = " + ".join(t6.format(v=v) for v in "xyz") + " + 1"
@@ -110,15 +131,7 @@ def test_chmutov_sextic_octant():
     truth = find_nodes(expr, box, starts=12)
     on_edges = (np.abs(truth) <= 1e-12).sum(axis=1) >= 2
     assert on_edges.sum() == 3
-    m = singmesh.mesh(text, box)
-    f = sympy.lambdify((X, Y, Z), expr, "numpy")
-    assert not boundary_edges_off_box(m.vertices, m.faces, box)
-    assert not non_manifold_edges(m.faces)
-    for p in truth:
-        d = np.linalg.norm(m.vertices - p, axis=1)
-        assert int((d <= 1e-9 * 1.25).sum()) == 1, p
-        want = branches_on_sphere(lambda q: f(q[..., 0], q[..., 1], q[..., 2]), p, 0.02, 240, 480, box=box)
-        assert fans_at(m.faces, int(np.argmin(d))) == want, p
+    _nodes_right(text, box, expr, truth, 0.02)
 
 
 def test_three_symmetric_candidates_give_no_cluster_warning():
@@ -239,10 +252,8 @@ def test_barth_sextic_cut_at_its_symmetry_planes(box):
     # Users mesh an octant or a half of a symmetric surface: Barth's sextic
     # has nodes on its symmetry planes (e.g. (0, 1/phi, phi)) where both
     # nappes of the cone cross the plane, two fans inside the box.
-    import sympy
-
     from benchmarks.nodes import find_nodes
-    from singmesh.surface import Surface, X, Y, Z
+    from singmesh.surface import Surface
 
     phi = (1 + 5 ** 0.5) / 2
     text = (f"4*({phi}^2*x^2 - y^2)*({phi}^2*y^2 - z^2)*({phi}^2*z^2 - x^2)"
@@ -252,12 +263,4 @@ def test_barth_sextic_cut_at_its_symmetry_planes(box):
     lim = np.array(box)
     on_faces = (np.abs(truth[:, :, None] - lim[None]) <= 1e-9).any(axis=(1, 2))
     assert on_faces.sum() >= 6
-    m = singmesh.mesh(text, box)
-    f = sympy.lambdify((X, Y, Z), expr, "numpy")
-    assert not boundary_edges_off_box(m.vertices, m.faces, box)
-    assert not non_manifold_edges(m.faces)
-    for p in truth:
-        d = np.linalg.norm(m.vertices - p, axis=1)
-        assert int((d <= 1e-9 * 3.6).sum()) == 1, p
-        want = branches_on_sphere(lambda q: f(q[..., 0], q[..., 1], q[..., 2]), p, 0.02, 240, 480, box=lim)
-        assert fans_at(m.faces, int(np.argmin(d))) == want, p
+    _nodes_right(text, box, expr, truth, 0.02)

@@ -769,65 +769,12 @@ def test_curve_edges_follow_the_curve(name, text, apex):
     assert worst >= 0.9, f"a curve edge {np.degrees(np.arccos(worst)):.0f} degrees off the curve's tangent"
 
 
-#: s2-126's factors: a plane and a quadric meeting along a hyperbola whose
-#: two branches pass 10.3 fine cells apart (fine 64), one of them an arc
-#: 1.6 cells deep from the face x = 1 back to it.
-S2_126 = ("7/5*z + 3*y - 3/4*x", "-3/7*z^2 - 4/5*x*z + 1/5*x^2 - 6/5*y - 1/8*x + 1/5")
-CLOSE_BRANCHES = [
-    ("s2-126", "*".join(f"({f})" for f in S2_126)),
-    ("s2-126 turned", _tilted_product(S2_126, (1, -2, 1), 0.05, (0.9, 0.35, -0.25), (-0.01, 0.02, 0.01))),
-]
-
-
-@pytest.mark.parametrize("name, text", CLOSE_BRANCHES, ids=[c[0] for c in CLOSE_BRANCHES])
-def test_close_branches_of_a_double_curve(name, text):
-    """Two branches of the double curve closer than two tubes' width: the
-    sheets between them are meshed (no open edge inside the box, no edge
-    of three triangles), and every point of f1 = f2 = 0 found here by
-    Newton on the factors lies on edges of four triangles.  On main the
-    tubes merged between the branches: the arc's 7 edges nearest the
-    other branch had no triangle (line cells), the other's 2."""
-    import meshcheck as mc
-    import singmesh
-    from scipy.spatial import cKDTree
-
-    box = ((-1.0, 1.0),) * 3
-    case = fc.case_from_text(name, text, box)
-    b = case.box_array()
-    arc = _common_zeros(*(fc.Field(f) for f in case.factors), b)
-    assert len(arc) >= 20
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        m = singmesh.mesh(text, box, coarse=8, fine=64)
-    V = np.asarray(m.vertices)
-    counts = mc.edge_counts(m.faces)
-    assert not [e for e, k in counts.items() if k not in (2, 4) and not (k == 1 and mc._same_box_face(V[e[0]], V[e[1]], b))]
-    four = np.array([e for e, k in counts.items() if k == 4])
-    on = np.concatenate([V[four[:, 0]], V[four[:, 1]], 0.5 * (V[four[:, 0]] + V[four[:, 1]])])
-    cell = 2.0 / m.stats["fine"]
-    far = cKDTree(on).query(arc)[0]
-    assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
-    assert fc.judge(case, 8, 64).status == "clean"
-
-
-#: s2-66's factors: a cubic with a singular point at the origin (quadratic
-#: part x (3 z - 5 y), an A2 point) and a plane 0.033 above it, tangent to
-#: the cubic there: four branches of the double curve from that crossing,
-#: 1.3 fine cells (fine 64) from the cubic's singular point.
-S2_66 = ("4*y^2*z + 8/7*x*y*z - 2/3*x^2*y + 3*x*z - 5*x*y", "6*z - 1/7*y + 4/7*x - 1/5")
-CROSSING_BESIDE_A_POINT = [
-    ("s2-66", "*".join(f"({f})" for f in S2_66)),
-    ("s2-66 turned", _tilted_product(S2_66, (2, 1, -1), 0.2, (0.0, 0.0, 0.0), (0.03, -0.02, 0.01))),
-]
-
-
-@pytest.mark.parametrize("name, text", CROSSING_BESIDE_A_POINT, ids=[c[0] for c in CROSSING_BESIDE_A_POINT])
-def test_crossing_of_curves_beside_a_singular_point(name, text):
-    """Each curve edge has four triangles (two sheets crossing) and every
-    other edge inside the box two; the points of f1 = f2 = 0 found here by
-    Newton on the factors lie on edges of four.  On main the rails round
-    the crossing, ten cells out on sheets bent by the cubic's singular
-    point, went out along a third branch and back: edges of six."""
+def _crossing_sheets_meshed(name: str, text: str):
+    """Mesh a product of two factors on [-1, 1]^3 (coarse 8, fine 64) and
+    check it against the factors: each edge inside the box has two
+    triangles or four (two sheets crossing), and every point of f1 = f2 = 0
+    found by Newton on the factors lies on (or a cell from) an edge of
+    four.  Returns the fuzz case."""
     import meshcheck as mc
     import singmesh
     from scipy.spatial import cKDTree
@@ -850,6 +797,50 @@ def test_crossing_of_curves_beside_a_singular_point(name, text):
     cell = 2.0 / m.stats["fine"]
     far = cKDTree(on).query(curve)[0]
     assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
+    return case
+
+
+#: s2-126's factors: a plane and a quadric meeting along a hyperbola whose
+#: two branches pass 10.3 fine cells apart (fine 64), one of them an arc
+#: 1.6 cells deep from the face x = 1 back to it.
+S2_126 = ("7/5*z + 3*y - 3/4*x", "-3/7*z^2 - 4/5*x*z + 1/5*x^2 - 6/5*y - 1/8*x + 1/5")
+CLOSE_BRANCHES = [
+    ("s2-126", "*".join(f"({f})" for f in S2_126)),
+    ("s2-126 turned", _tilted_product(S2_126, (1, -2, 1), 0.05, (0.9, 0.35, -0.25), (-0.01, 0.02, 0.01))),
+]
+
+
+@pytest.mark.parametrize("name, text", CLOSE_BRANCHES, ids=[c[0] for c in CLOSE_BRANCHES])
+def test_close_branches_of_a_double_curve(name, text):
+    """Two branches of the double curve closer than two tubes' width: the
+    sheets between them are meshed (no open edge inside the box, no edge
+    of three triangles), and every point of f1 = f2 = 0 found here by
+    Newton on the factors lies on edges of four triangles.  On main the
+    tubes merged between the branches: the arc's 7 edges nearest the
+    other branch had no triangle (line cells), the other's 2."""
+    case = _crossing_sheets_meshed(name, text)
+    assert fc.judge(case, 8, 64).status == "clean"
+
+
+#: s2-66's factors: a cubic with a singular point at the origin (quadratic
+#: part x (3 z - 5 y), an A2 point) and a plane 0.033 above it, tangent to
+#: the cubic there: four branches of the double curve from that crossing,
+#: 1.3 fine cells (fine 64) from the cubic's singular point.
+S2_66 = ("4*y^2*z + 8/7*x*y*z - 2/3*x^2*y + 3*x*z - 5*x*y", "6*z - 1/7*y + 4/7*x - 1/5")
+CROSSING_BESIDE_A_POINT = [
+    ("s2-66", "*".join(f"({f})" for f in S2_66)),
+    ("s2-66 turned", _tilted_product(S2_66, (2, 1, -1), 0.2, (0.0, 0.0, 0.0), (0.03, -0.02, 0.01))),
+]
+
+
+@pytest.mark.parametrize("name, text", CROSSING_BESIDE_A_POINT, ids=[c[0] for c in CROSSING_BESIDE_A_POINT])
+def test_crossing_of_curves_beside_a_singular_point(name, text):
+    """Each curve edge has four triangles (two sheets crossing) and every
+    other edge inside the box two; the points of f1 = f2 = 0 found here by
+    Newton on the factors lie on edges of four.  On main the rails round
+    the crossing, ten cells out on sheets bent by the cubic's singular
+    point, went out along a third branch and back: edges of six."""
+    _crossing_sheets_meshed(name, text)
 
 
 #: Failures of ``benchmarks/fuzz.py`` not fixed yet (seed, index, what is
