@@ -260,6 +260,9 @@ LATTICE_LINES = [
     ("shifted by 1/4", "-0.2*x*y + 3*x*z - 0.2125*x - 4*y*z + 0.3*y - 0.25*z + 0.021875",
      ((-0.25, 0.75), (-1.125, 0.875), (-1.4375, 1.5625)),
      "-4*(y+0.125)*(z-0.0625) + 3*(x-0.25)*(z-0.0625) - 0.2*(x-0.25)*(y+0.125) + (z-0.0625)", True),
+    # 15-digit coefficients (c, 4c, 3c, c / 5 of c = 0.123456789012345; clean on main too).
+    ("15 digits", "-0.49382715604938*y*z + 0.370370367037035*x*z - 0.024691357802469*x*y + 0.123456789012345*z",
+     ((-0.5, 0.5), (-1, 1), (-1.5, 1.5)), f"0.123456789012345*({QUADRIC_Y_AXIS})", True),
     # The two lines in the face x = 0 of the box (a crack in that face on main).
     ("in a face", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((0, 0.5), (-1, 1), (-1.5, 1.5)), QUADRIC_Y_AXIS, False),
     ("on an edge", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((0, 0.5), (-1, 1), (-1.5, 0)), QUADRIC_Y_AXIS, False),
