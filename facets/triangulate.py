@@ -4,7 +4,8 @@ A facet is a small polygon of surface points (its vertices lie on the
 surface, the polygon is nearly planar).  For up to
 ``MAX_TEMPLATE_POLYGON`` vertices every triangulation is tried at once on
 all polygons of that size, and the one whose smallest angle is largest
-wins (triangles facing against the surface normal count as worst).  Larger
+wins (triangles facing against the surface normal count as worst, flat
+ones, which :func:`singmesh.facets.assemble.assemble` drops, worse still).  Larger
 polygons get a centre vertex, projected onto the surface, and a fan.
 """
 
@@ -36,8 +37,24 @@ def polygon_triangulations(n: int) -> np.ndarray:
     return np.array(tri(0, n - 1), dtype=np.int64).reshape(-1, n - 2, 3)
 
 
+#: Quality of a triangle facing against the polygon's normal: kept, but
+#: worse than any facing with it.
+AGAINST_QUALITY = -1.0
+#: Quality of a flat triangle (``ZERO_AREA``: the one :func:`assemble`
+#: drops): below a triangle facing away, since dropping it leaves a hole
+#: (fuzz s4-36: a coarse box's facet along a line in the surface carries its
+#: finer neighbours' vertices on that line, every triangulation has a
+#: triangle facing away, and the first, chosen on that tie, two flat ones
+#: among those vertices: open edges).  Above ``FORBIDDEN_QUALITY``.
+FLAT_QUALITY = -1.5
+#: Quality of a triangle that :func:`_choose_template` forbids.
+FORBIDDEN_QUALITY = -2.0
+
+
 def triangle_quality(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """Smallest angle (radians) of triangles (..., 3, 3); -1 if facing against ``normal``."""
+    """Smallest angle (radians) of triangles (..., 3, 3); ``AGAINST_QUALITY`` if facing against
+    ``normal``, ``FLAT_QUALITY`` if flat (doubled area at most ``ZERO_AREA`` times the longest
+    side squared)."""
     return _quality([p[..., 0, a] for a in range(3)], [p[..., 1, a] for a in range(3)],
                     [p[..., 2, a] for a in range(3)], [normal[..., a] for a in range(3)])
 
@@ -54,7 +71,8 @@ def _quality(q0, q1, q2, normal) -> np.ndarray:
     e1 = [b - a for a, b in zip(q1, q2)]
     e2 = [b - a for a, b in zip(q2, q0)]
     # Each side's length once (|-e| is |e| to the bit: the same squares).
-    n0, n1, n2 = (np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) for e in (e0, e1, e2))
+    s0, s1, s2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] for e in (e0, e1, e2))
+    n0, n1, n2 = np.sqrt(s0), np.sqrt(s1), np.sqrt(s2)
 
     def angle(a, b, na, nb):
         # The angle between a and -b; einsum's sum over an axis of 3 adds
@@ -67,7 +85,11 @@ def _quality(q0, q1, q2, normal) -> np.ndarray:
     m2 = [-x for x in e2]
     cross = (e0[1] * m2[2] - e0[2] * m2[1], e0[2] * m2[0] - e0[0] * m2[2], e0[0] * m2[1] - e0[1] * m2[0])
     facing = (cross[0] * normal[0] + cross[2] * normal[2]) + cross[1] * normal[1]
-    return np.where(facing > 0, ang, -1.0)
+    # Flat as :func:`singmesh.facets.flips.area_and_longest` and
+    # ``assemble`` measure it (the same cross product and squared sides).
+    area2 = np.sqrt((cross[0] * cross[0] + cross[1] * cross[1]) + cross[2] * cross[2])
+    flat = area2 <= tol.ZERO_AREA * np.maximum(np.maximum(s0, s1), s2)
+    return np.where(flat, FLAT_QUALITY, np.where(facing > 0, ang, AGAINST_QUALITY))
 
 
 def triangulate_polygons(
@@ -268,7 +290,7 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
     combos = _combos(n)
     tmpl_idx = _template_combos(n)
     if forbidden is not None and len(forbidden):
-        q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), -2.0, q)
+        q = np.where(np.isin(_triple_keys(poly[:, combos], n_vertices), forbidden), FORBIDDEN_QUALITY, q)
     if forbidden_edges is not None and len(forbidden_edges):
         # The sides of each triangle that are diagonals of the polygon
         # (its own sides are in every triangulation).
@@ -277,7 +299,7 @@ def _choose_template(poly: np.ndarray, q: np.ndarray, forbidden: np.ndarray | No
         diagonal = (gap != 1) & (gap != n - 1)                           # (C, 3)
         keys = edge_keys(poly[:, ends[..., 0]], poly[:, ends[..., 1]], n_vertices)   # (P, C, 3)
         bad = (np.isin(keys, forbidden_edges) & diagonal[None]).any(axis=2)
-        q = np.where(bad, -2.0, q)
+        q = np.where(bad, FORBIDDEN_QUALITY, q)
     # The smallest quality of each template's triangles (P, T): exact, as
     # q[:, tmpl_idx].min(axis=2), without a reduction call per (P, T) row.
     score = q[:, tmpl_idx[:, 0]]

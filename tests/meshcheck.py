@@ -154,3 +154,29 @@ def close_vertex_pairs(vertices, box, rel=1e-9) -> int:
         return 0
     size = np.ptp(np.asarray(box, float), axis=1).max()
     return len(cKDTree(v).query_pairs(rel * size))
+
+
+def boundary_t_junctions(vertices, faces, rel=1e-9) -> int:
+    """Boundary edges with another mesh vertex strictly inside them (within ``rel`` of the
+    edge's length off its line): a crack between a chain of short edges on one side and one
+    long edge on the other, also where the edges lie in a face of the box."""
+    from scipy.spatial import cKDTree
+
+    v = np.asarray(vertices, float)
+    edges = boundary_edges(faces)
+    if not edges:
+        return 0
+    tree = cKDTree(v)
+    count = 0
+    for a, b in edges:
+        p, q = v[a], v[b]
+        d = q - p
+        length = float(np.linalg.norm(d))
+        for k in tree.query_ball_point(0.5 * (p + q), 0.5 * length * (1 + 1e-9)):
+            if k in (a, b):
+                continue
+            t = float(np.dot(v[k] - p, d)) / length ** 2
+            if rel < t < 1 - rel and np.linalg.norm(p + t * d - v[k]) <= rel * length:
+                count += 1
+                break
+    return count

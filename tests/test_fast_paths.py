@@ -215,8 +215,11 @@ def _row_quality(p, normal):
         return np.arccos(np.clip(np.einsum("...i,...i->...", a, b) / np.maximum(na * nb, 1e-300), -1.0, 1.0))
 
     ang = np.minimum(np.minimum(angle(e0, -e2, n0, n2), angle(e1, -e0, n1, n0)), angle(e2, -e1, n2, n1))
-    facing = np.einsum("...i,...i->...", np.cross(e0, -e2), normal)
-    return np.where(facing > 0, ang, -1.0)
+    cross = np.cross(e0, -e2)
+    facing = np.einsum("...i,...i->...", cross, normal)
+    # Flat (what assemble drops): below facing away.
+    flat = np.linalg.norm(cross, axis=-1) <= 1e-12 * np.maximum(np.maximum(n0 * n0, n1 * n1), n2 * n2)
+    return np.where(flat, -1.5, np.where(facing > 0, ang, -1.0))
 
 
 @pytest.mark.parametrize("n", [4, 5, 6, 8])
@@ -232,7 +235,7 @@ def test_template_quality_per_coordinate_is_the_rows(n):
     combos = _combos(n)
     want = _row_quality(points[poly[:, combos]], normals[poly].sum(axis=1)[:, None, :])
     got = _template_quality(poly, points, normals)
-    assert (want == -1.0).any() and (want > 0).any()
+    assert (want == -1.0).any() and (want > 0).any() and (want == -1.5).any()
     assert np.array_equal(got.view(np.int64), want.view(np.int64))
     p = points[poly[:, :3]]
     assert np.array_equal(triangle_quality(p, normals[:300]).view(np.int64),

@@ -379,6 +379,21 @@ REGRESSIONS = [
      "(0.6*x^2 - 0.3*x - 2.25*y*z + 0.2109375*y - 0.28125*z + 0.0638671875)*(-1.0286079054028*x*z"
      " - 2.51925050791718*x + 2.97841050879985*z^2 - 0.301299994049272*z - 1.26518356040674)",
      ((-2.0, 2.0), (-2.0, 2.0), (-1.5, 1.5)), 8, 64),
+    # The y-axis and the line x = 0, y = 1/4 lie on the quadric, crossing at
+    # a lattice point where its tangent plane is the split plane x = 0.  The
+    # facet of a coarse box beside finer ones along the axis has their
+    # vertices on the axis and is folded (part of it flat in x = 0), so
+    # every triangulation has a triangle facing away: the first, chosen on
+    # that tie, had two flat triangles among the axis vertices, dropped (4
+    # open edges at every coarse / fine; facets/triangulate.py FLAT_QUALITY).
+    ("s4-36 a line of the quadric on a lattice line", "-4*y*z + 3*x*z - 1/5*x*y + 1*z",
+     ((-0.5, 0.5), (-1.0, 1.0), (-1.5, 1.5)), 8, 64),
+    ("s4-36 at 16 / 128", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((-0.5, 0.5), (-1.0, 1.0), (-1.5, 1.5)), 16, 128),
+    # The same in the split plane y = 0, which holds the line x = -z / 9^(1/3)
+    # of the surface (not a lattice line): the vertices of finer boxes on it
+    # in a coarse box's folded facet (6 open edges on main).
+    ("s3-600 a line of the surface in a split plane", "-1*x*z^4 - 2/5*x^3*y*z + 4/5*x^3*y^2 - 9*x^4*z - 4*y^3*z",
+     ((-1.5, 1.5), (-1.5, 1.5), (-0.5, 0.5)), 8, 64),
 ]
 
 
@@ -855,7 +870,6 @@ OPEN_CASES = [
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
     (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
     (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
-    (3, 600, "open edges on a sheet by a non-simple point (no curve)"),
     (3, 726, "two planes crossing along a line 0-3.3 cells inside the face x = -1 (5.7 degrees off it): "
              "edges of six triangles"),
     (3, 818, "a double curve within 3 cells of a face: edges of three and five triangles"),
@@ -863,7 +877,6 @@ OPEN_CASES = [
     (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
     (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
             "four only on a product's curve; maybe its limit, not checked)"),
-    (4, 36, "a quadric: open edges on a sheet at the origin"),
     (4, 206, "a plane and a cubic: non-manifold edges"),
     (4, 210, "an edge of six triangles on the double curve"),
     (4, 426, "36 edges of six triangles near the face z = 1"),

@@ -235,3 +235,67 @@ def test_events_on_segments_by_brute_force(monkeypatch, few, dense):
     expected = {(k, e) for k, (a, u, v, lo, hi) in enumerate(seg.tolist())
                 for e in by_line.get((a, u, v), ()) if lo <= cell[e] < hi}
     assert len(events.key) > 100 and len(got) > len(events.key) and got == expected
+
+
+#: Smooth surfaces containing a line that is a lattice line (on the split
+#: planes of the box, or in a face or on an edge of the box), where the
+#: octree is finer on one side of the line than on the other: the coarse
+#: box's facet carries the finer boxes' vertices on the line (fuzz s4-36:
+#: the y-axis and the line x = 0, y = 1/4 lie on the quadric, crossing at a
+#: lattice point where its tangent plane is the split plane x = 0).
+#: name, equation, box, numpy F (written apart), whether the line is inside
+#: the box (then chi and components are those of marching cubes).
+QUADRIC_Y_AXIS = "-4*y*z + 3*x*z - 0.2*x*y + z"
+LATTICE_LINES = [
+    ("s4-36", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((-0.5, 0.5), (-1, 1), (-1.5, 1.5)), QUADRIC_Y_AXIS, True),
+    ("axes permuted", "-4*x*y + 3*z*y - 1/5*z*x + 1*y", ((-1, 1), (-1.5, 1.5), (-0.5, 0.5)),
+     "-4*x*y + 3*z*y - 0.2*z*x + y", True),
+    ("cubic terms", "-4*y*z + 3*x*z - 1/5*x*y + z + 2*x*z^2 - x^2*y", ((-0.5, 0.5), (-1, 1), (-1.5, 1.5)),
+     QUADRIC_Y_AXIS + " + 2*x*z**2 - x**2*y", True),
+    # Moved by (0.1, 0.2, 0.3), box and all: decimal coefficients, a box
+    # whose lattice points are the line's only to rounding.
+    ("shifted", "-0.2*x*y + 3*x*z - 0.86*x - 4*y*z + 1.22*y + 1.5*z - 0.454",
+     ((-0.4, 0.6), (-0.8, 1.2), (-1.2, 1.8)),
+     "-4*(y-0.2)*(z-0.3) + 3*(x-0.1)*(z-0.3) - 0.2*(x-0.1)*(y-0.2) + (z-0.3)", True),
+    ("shifted by 1/4", "-0.2*x*y + 3*x*z - 0.2125*x - 4*y*z + 0.3*y - 0.25*z + 0.021875",
+     ((-0.25, 0.75), (-1.125, 0.875), (-1.4375, 1.5625)),
+     "-4*(y+0.125)*(z-0.0625) + 3*(x-0.25)*(z-0.0625) - 0.2*(x-0.25)*(y+0.125) + (z-0.0625)", True),
+    # 15-digit coefficients (c, 4c, 3c, c / 5 of c = 0.123456789012345; clean on main too).
+    ("15 digits", "-0.49382715604938*y*z + 0.370370367037035*x*z - 0.024691357802469*x*y + 0.123456789012345*z",
+     ((-0.5, 0.5), (-1, 1), (-1.5, 1.5)), f"0.123456789012345*({QUADRIC_Y_AXIS})", True),
+    # The two lines in the face x = 0 of the box (a crack in that face on main).
+    ("in a face", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((0, 0.5), (-1, 1), (-1.5, 1.5)), QUADRIC_Y_AXIS, False),
+    ("on an edge", "-4*y*z + 3*x*z - 1/5*x*y + 1*z", ((0, 0.5), (-1, 1), (-1.5, 0)), QUADRIC_Y_AXIS, False),
+]
+
+
+def _marching_cubes_topology(f, box, n=128):
+    """(chi, components) of the marching-cubes mesh of ``f`` on a grid shifted off every split plane."""
+    from skimage.measure import marching_cubes
+
+    h = (box[:, 1] - box[:, 0]) / n
+    axes = [np.linspace(b[0] + 0.37 * s, b[1] - 0.63 * s, n) for b, s in zip(box, h)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+    v, t = marching_cubes(f(grid), 0.0, spacing=tuple(h))[:2]
+    return mc.euler(v, t), mc.components(t)
+
+
+@pytest.mark.parametrize("coarse, fine", [(8, 64), (16, 128)])
+@pytest.mark.parametrize("name, text, box, expr, inside", LATTICE_LINES, ids=[c[0] for c in LATTICE_LINES])
+def test_line_of_the_surface_on_a_lattice_line_beside_finer_boxes(name, text, box, expr, inside, coarse, fine):
+    box = np.array(box, float)
+    f = F(expr)
+    m = singmesh.mesh(text, box, coarse=coarse, fine=fine)
+    assert len(m.faces) > 100
+    assert mc.non_manifold_edges(m.faces) == []
+    assert mc.boundary_edges_off_box(m.vertices, m.faces, box) == []
+    # No crack along the line, in the box or in its faces: no boundary edge
+    # with a vertex of the mesh inside it.
+    assert mc.boundary_t_junctions(m.vertices, m.faces) == 0
+    assert mc.degenerate_triangles(m.vertices, m.faces) == 0
+    v = m.vertices
+    d = np.abs(f(v)) / np.linalg.norm(grad(f, v), axis=1)
+    assert d.max() <= 1e-10 * np.ptp(box, axis=1).max()
+    if inside:
+        pytest.importorskip("skimage")
+        assert (mc.euler(m.vertices, m.faces), mc.components(m.faces)) == _marching_cubes_topology(f, box)
