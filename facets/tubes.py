@@ -254,6 +254,34 @@ def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.n
     return np.vstack([a[owner] + t[:, None] * (b - a)[owner], points])
 
 
+def untraced_points(curves, spacing: float) -> np.ndarray:
+    """Points (k, 3) round which the tube's face squares keep their own pairing (not traced for the rails).
+
+    The samples of every curve piece but the A1 double curves, and every
+    special point (ends on the box, pinch and triple points): there the
+    half-sheets' traces on a face meet, or F's gradient falls faster than
+    the distance and the face events are as far off F = 0 as it makes
+    them (fuzz s1-704, a corank 2 edge 0.7 cells inside a face).  Beside
+    a double curve between its special points the gradient grows as the
+    distance and the two sheets' traces on a face a cell or less away run
+    apart: tracing parts them there (fuzz s3-726, two planes crossing
+    along a line 0-3.3 cells inside a face: untraced, the squares within
+    1.5 cells of it joined one sheet's trace to the other's and the rails
+    broke, edges of six triangles).
+    """
+    keep = np.zeros(len(curves.edges), bool)
+    if len(curves.edges):
+        double = np.zeros(len(curves.points), bool)
+        for c in curves.pieces:
+            if c.type == "A1 double curve" and c.vertices is not None:
+                double[np.asarray(c.vertices, np.int64)] = True
+        keep = ~(double[curves.edges[:, 0]] & double[curves.edges[:, 1]])
+    special = np.asarray(curves.points, float)[np.asarray(curves.special_vertex, np.int64)].reshape(-1, 3)
+    if not keep.any():
+        return special
+    return np.vstack([curve_samples(curves.points, curves.edges[keep], spacing), special])
+
+
 def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
                    pad: float, block: int = 8) -> np.ndarray:
     """Boxes (k, 2, 3) covering the curve with ``pad`` fine cells to spare.
