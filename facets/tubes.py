@@ -904,13 +904,23 @@ def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float
     there; a chain holds at most one rail that is not a stub (the two
     sheets through a curve at a small angle leave stubs side by side,
     interleaved along the face: rotated planes at 5 degrees, seed 4).
+    A short run with its ends on two faces is a stub too: a rail along a
+    face stopped by a box edge, whose half-sheet goes on round the edge
+    onto the next face (a line 3 cells inside x = -1 at 4 degrees ending
+    on y = 1: both pieces fanned to the curve's end, edges of six).
     """
     open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
     stubs = set()
     for k in open_:
         p = event_points[rail_list[k][0]]
         a, b = p[0], p[-1]
-        if not (faces_of(a, box) & faces_of(b, box)).any():
+        # Both ends on the box: on one face, or (a short run round a box
+        # edge, its start by the end of the rail it continues on one face
+        # and its end on the next) on two.
+        if not (faces_of(a, box).any() and faces_of(b, box).any()):
+            continue
+        if not (faces_of(a, box) & faces_of(b, box)).any() and \
+                float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) > 2 * gap:
             continue
         # Ends close together, or a short run as a whole (rotated planes
         # at 6 degrees, seed 4: 4 links a little over 3 cells end to end,
