@@ -254,6 +254,34 @@ def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.n
     return np.vstack([a[owner] + t[:, None] * (b - a)[owner], points])
 
 
+def untraced_points(curves, spacing: float) -> np.ndarray:
+    """Points (k, 3) round which the tube's face squares keep their own pairing (not traced for the rails).
+
+    The samples of every curve piece but the A1 double curves, and every
+    special point (ends on the box, pinch and triple points): there the
+    half-sheets' traces on a face meet, or F's gradient falls faster than
+    the distance and the face events are as far off F = 0 as it makes
+    them (fuzz s1-704, a corank 2 edge 0.7 cells inside a face).  Beside
+    a double curve between its special points the gradient grows as the
+    distance and the two sheets' traces on a face a cell or less away run
+    apart: tracing parts them there (fuzz s3-726, two planes crossing
+    along a line 0-3.3 cells inside a face: untraced, the squares within
+    1.5 cells of it joined one sheet's trace to the other's and the rails
+    broke, edges of six triangles).
+    """
+    keep = np.zeros(len(curves.edges), bool)
+    if len(curves.edges):
+        double = np.zeros(len(curves.points), bool)
+        for c in curves.pieces:
+            if c.type == "A1 double curve" and c.vertices is not None:
+                double[np.asarray(c.vertices, np.int64)] = True
+        keep = ~(double[curves.edges[:, 0]] & double[curves.edges[:, 1]])
+    special = np.asarray(curves.points, float)[np.asarray(curves.special_vertex, np.int64)].reshape(-1, 3)
+    if not keep.any():
+        return special
+    return np.vstack([curve_samples(curves.points, curves.edges[keep], spacing), special])
+
+
 def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
                    pad: float, block: int = 8) -> np.ndarray:
     """Boxes (k, 2, 3) covering the curve with ``pad`` fine cells to spare.
@@ -876,13 +904,23 @@ def _join_stubs(rail_list, event_points: np.ndarray, box: np.ndarray, gap: float
     there; a chain holds at most one rail that is not a stub (the two
     sheets through a curve at a small angle leave stubs side by side,
     interleaved along the face: rotated planes at 5 degrees, seed 4).
+    A short run with its ends on two faces is a stub too: a rail along a
+    face stopped by a box edge, whose half-sheet goes on round the edge
+    onto the next face (a line 3 cells inside x = -1 at 4 degrees ending
+    on y = 1: both pieces fanned to the curve's end, edges of six).
     """
     open_ = [k for k, (ev, closed) in enumerate(rail_list) if not closed and len(ev) >= 2]
     stubs = set()
     for k in open_:
         p = event_points[rail_list[k][0]]
         a, b = p[0], p[-1]
-        if not (faces_of(a, box) & faces_of(b, box)).any():
+        # Both ends on the box: on one face, or (a short run round a box
+        # edge, its start by the end of the rail it continues on one face
+        # and its end on the next) on two.
+        if not (faces_of(a, box).any() and faces_of(b, box).any()):
+            continue
+        if not (faces_of(a, box) & faces_of(b, box)).any() and \
+                float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) > 2 * gap:
             continue
         # Ends close together, or a short run as a whole (rotated planes
         # at 6 degrees, seed 4: 4 links a little over 3 cells end to end,

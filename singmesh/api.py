@@ -22,7 +22,7 @@ from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
 from singmesh.facets.coarsen import coarsen_crease_mesh
-from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions
+from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions, untraced_points
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
 from singmesh.skeleton.singular import singular_points, skeleton_nodes
@@ -345,7 +345,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # The rails read the tube's squares on the box's faces paired by
         # following the surface's trace (two sheets less than a cell apart
         # there); the boxes' cycles keep their links.
-        r_links = rail_links(surf, tree, events, links, group == tube_id, avoid,
+        r_links = rail_links(surf, tree, events, links, group == tube_id,
+                             untraced_points(curves, 0.25 * float(cell.max())),
                              tol.CURVE_TUBE_RADIUS * float(cell.max()))
         traced = None if r_links is links else (box_links(r_links, group), r_links)
         offsets, keys, pts, apex = add_strips(offsets, keys, pts, apex, grouped, links, events, curves,
