@@ -36,7 +36,8 @@ def curve_key0(events) -> int:
     return (int(events.key.max()) + 1 if len(events.key) else 0) + (1 << 40)
 
 
-def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list, tube_id: int = -1):
+def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list, tube_id: int = -1, *,
+                   expected: list):
     """Facet polygons (offsets, keys, points, apex flags) and branch counts.
 
     Plain boxes give one polygon per cycle; the star of a singular point
@@ -55,6 +56,10 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     points : list of SingularPoint
     tube_id : int
         Box id of the tube (its cycles are meshed as strips, not here).
+    expected : list
+        Each point's branch count to tell its stray cycles by (None where
+        unknown, as on a face of the box, where only the branches inside
+        the box meet it).
 
     Returns
     -------
@@ -75,10 +80,6 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     """
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
-    # A point on a face of the box has only the branches inside it there:
-    # no count to tell its stray cycles by.
-    cut = topology.on_box_boundary(np.array([sp.point for sp in points]).reshape(-1, 3), tree.box, tol.STAR_ON_BOX)
-    expected = [None if c else getattr(sp.classification, "branches", None) for c, sp in zip(cut.tolist(), points)]
     plain |= stray_cycles(cycles, events, stars, expected)
     tube = cycles.box == tube_id  # meshed as strips
     plain &= ~tube

@@ -339,7 +339,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             break
         cubes = shrink_cubes(first, cubes, centres, few)
 
-    offsets, keys, pts, apex, branches, splits = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id)
+    offsets, keys, pts, apex, branches, splits = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id,
+                                                                 expected=expected)
     key0 = curve_key0(events)
     if len(curves.points):
         # The rails read the tube's squares on the box's faces paired by

@@ -801,12 +801,13 @@ def test_curve_edges_follow_the_curve(name, text, apex):
     assert worst >= 0.9, f"a curve edge {np.degrees(np.arccos(worst)):.0f} degrees off the curve's tangent"
 
 
-def _crossing_sheets_meshed(name: str, text: str):
+def _crossing_sheets_meshed(name: str, text: str, least: int = 20):
     """Mesh a product of two factors on [-1, 1]^3 (coarse 8, fine 64) and
     check it against the factors: each edge inside the box has two
     triangles or four (two sheets crossing), and every point of f1 = f2 = 0
     found by Newton on the factors lies on (or a cell from) an edge of
-    four.  Returns the fuzz case."""
+    four.  Returns the fuzz case, the mesh's vertices, its edges of four
+    and the fine cell."""
     import meshcheck as mc
     import singmesh
     from scipy.spatial import cKDTree
@@ -815,7 +816,7 @@ def _crossing_sheets_meshed(name: str, text: str):
     case = fc.case_from_text(name, text, box)
     b = case.box_array()
     curve = _common_zeros(*(fc.Field(f) for f in case.factors), b)
-    assert len(curve) >= 20
+    assert len(curve) >= least
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         m = singmesh.mesh(text, box, coarse=8, fine=64)
@@ -829,7 +830,7 @@ def _crossing_sheets_meshed(name: str, text: str):
     cell = 2.0 / m.stats["fine"]
     far = cKDTree(on).query(curve)[0]
     assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the crossing edges"
-    return case
+    return case, V, four, cell
 
 
 #: s2-126's factors: a plane and a quadric meeting along a hyperbola whose
@@ -850,7 +851,7 @@ def test_close_branches_of_a_double_curve(name, text):
     Newton on the factors lies on edges of four triangles.  On main the
     tubes merged between the branches: the arc's 7 edges nearest the
     other branch had no triangle (line cells), the other's 2."""
-    case = _crossing_sheets_meshed(name, text)
+    case = _crossing_sheets_meshed(name, text)[0]
     assert fc.judge(case, 8, 64).status == "clean"
 
 
@@ -915,27 +916,9 @@ def test_double_curve_near_a_face(kind, depth, angle):
     squares were not traced: one sheet's trace on the face was joined to
     the other's, the rails broke and a piece of one was zipped to the
     curve twice (fuzz s3-726: edges of six triangles)."""
-    import meshcheck as mc
-    import singmesh
-    from scipy.spatial import cKDTree
-
-    box = ((-1.0, 1.0),) * 3
     text = _near_face(kind, depth, angle)
-    case = fc.case_from_text(f"{kind} {depth} {angle}", text, box)
-    b = case.box_array()
+    case, V, four, cell = _crossing_sheets_meshed(f"{kind} {depth} {angle}", text, least=100)
     f1, f2 = (fc.Field(f) for f in case.factors)
-    curve = _common_zeros(f1, f2, b)
-    assert len(curve) >= 100
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        m = singmesh.mesh(text, box, coarse=8, fine=64)
-    V = np.asarray(m.vertices)
-    counts = mc.edge_counts(m.faces)
-    wrong = [(k, V[e[0]].round(3).tolist()) for e, k in counts.items()
-             if k not in (2, 4) and not (k == 1 and mc._same_box_face(V[e[0]], V[e[1]], b))]
-    assert not wrong, f"{len(wrong)} edges: {wrong[:3]}"
-    four = np.array([e for e, k in counts.items() if k == 4])
-    cell = 2.0 / m.stats["fine"]
     # Each edge of four on the curve: its midpoint's Newton (min-norm) step
     # onto f1 = f2 = 0 is short (the chord of a circle sags 1e-3 cell).
     mid = 0.5 * (V[four[:, 0]] + V[four[:, 1]])
@@ -945,9 +928,6 @@ def test_double_curve_near_a_face(kind, depth, angle):
         r = np.stack([f1.value(q), f2.value(q)], axis=1)
         q = q - np.einsum("kij,kj->ki", np.linalg.pinv(J), r)
     assert np.linalg.norm(q - mid, axis=1).max() <= 0.05 * cell
-    on = np.concatenate([V[four[:, 0]], V[four[:, 1]], mid])
-    far = cKDTree(on).query(curve)[0]
-    assert far.max() <= cell, f"curve points {far.max() / cell:.2g} cells from the edges of four"
 
 
 #: Failures of ``benchmarks/fuzz.py`` not fixed yet (seed, index, what is
