@@ -252,7 +252,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # that was not traced (``overflow``) is reported, not meshed.
     avoid = curve_samples(curves.points, curves.edges, 0.25 * float(cell.max())) if len(curves.points) else None
     points, overflow = singular_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL),
-                                       avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()))
+                                       avoid=avoid, avoid_radius=tol.CURVE_AVOID * float(cell.max()),
+                                       on_radius=tol.CURVE_ON * float(cell.max()))
     # Where a root of a sum of squares in F vanishes on the surface (a
     # cone's apex written with sqrt), F is not differentiable: such points
     # are meshed as singular points, with a star.

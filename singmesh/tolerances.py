@@ -538,6 +538,15 @@ CURVE_TANGENCY_RTOL = 0.02
 #: traced curve (its pinch and triple points are the curve's).
 CURVE_AVOID = 3.0
 
+#: A Newton end this many fine cells from a traced curve's samples (a
+#: quarter cell apart: a point of the curve is within an eighth) is a
+#: point of that curve; one further off is an isolated point beside it.
+CURVE_ON = 0.25
+#: Newton steps from the boxes round a traced curve: a few take most of
+#: them onto it (those are dropped), then enough for the rest to reach a
+#: point beside it (a node in 5, an A2 to the loose residual in 10).
+CURVE_NEAR_STEPS = (4, 12)
+
 #: Traces that lose the curve within this many trace steps of each other
 #: are joined at one point of the singular locus between their ends.
 CURVE_JOIN = 3.0

@@ -198,7 +198,7 @@ def accept_residual(surface: Surface) -> float:
 
 
 def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | None = None,
-                    avoid_radius: float = 0.0) -> tuple[list[SingularPoint], bool]:
+                    avoid_radius: float = 0.0, on_radius: float = 0.0) -> tuple[list[SingularPoint], bool]:
     """Isolated singular points of F = 0 in ``box``.
 
     Parameters
@@ -208,9 +208,12 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
     level : int
         Depth of the candidate search (``2**level`` boxes per axis).
     avoid : (k, 3) ndarray, optional
-        Points of curves of singular points already traced: candidate boxes
-        within ``avoid_radius`` of them are theirs, not searched again.
-    avoid_radius : float
+        Points of curves of singular points already traced, no further
+        apart than ``on_radius``: candidate boxes within ``avoid_radius`` of
+        them are not tested for curves again, and Newton ends within
+        ``on_radius`` of them are points of those curves.  Ends off them (a
+        point of F beside a curve) are isolated points as anywhere else.
+    avoid_radius, on_radius : float
 
     Returns
     -------
@@ -221,7 +224,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
         at a point; those are not in ``points``.
     """
     box = np.asarray(box, dtype=float)
-    found, curve = _points_in(surface, box, *candidate_boxes(surface, box, level), avoid, avoid_radius)
+    found, curve = _points_in(surface, box, *candidate_boxes(surface, box, level), avoid, avoid_radius, on_radius)
     size = float(np.max(box[:, 1] - box[:, 0]))
     for _ in range(tol.SINGULAR_CROWD_LEVELS):
         # Points a cell or two apart (Labs' septic's neighbouring orbits
@@ -235,7 +238,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
             break
         level += 1
         lo, hi = candidate_boxes(surface, box, level, near=(at[crowded], tol.SINGULAR_CROWD * cell))
-        more, c = _points_in(surface, box, lo, hi, avoid, avoid_radius)
+        more, c = _points_in(surface, box, lo, hi, avoid, avoid_radius, on_radius)
         curve |= c
         if more:
             # Points both searches found are the first's.
@@ -262,21 +265,32 @@ def _nearest(points: np.ndarray, queries: np.ndarray, k: int = 1):
 
 
 def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-               avoid: np.ndarray | None, avoid_radius: float) -> tuple[list[SingularPoint], bool]:
+               avoid: np.ndarray | None, avoid_radius: float,
+               on_radius: float) -> tuple[list[SingularPoint], bool]:
     """The singular points :func:`singular_points` finds from the candidate boxes ``lo``, ``hi``."""
+    near = np.zeros(len(lo), bool)
+    tree = None
     if avoid is not None and len(avoid) and len(lo):
         from scipy.spatial import cKDTree
 
-        d, _ = cKDTree(avoid).query((lo + hi) / 2)
-        far = d > avoid_radius + float(np.linalg.norm(hi[0] - lo[0]))
-        lo, hi = lo[far], hi[far]
+        tree = cKDTree(avoid)
+        d, _ = tree.query((lo + hi) / 2)
+        near = d <= avoid_radius + float(np.linalg.norm(hi[0] - lo[0]))
     # A curve of singular points makes a long chain of candidate boxes
     # with singular points all along it.  Starts in a chain are not points.
-    on_curve = _curve_chains(surface, lo, hi, box)
+    # The boxes round a traced curve are its chain: they are not tested
+    # (the curve is known), but Newton runs from them below, since a point
+    # of F beside the curve (an A2 of one factor a cell from the other)
+    # has its boxes there too.
+    on_curve = np.zeros(len(lo), bool)
+    on_curve[~near] = _curve_chains(surface, lo[~near], hi[~near], box)
     curve = bool(on_curve.any())
-    lo, hi = lo[~on_curve], hi[~on_curve]
+    lo, hi, near = lo[~on_curve], hi[~on_curve], near[~on_curve]
     if len(lo) == 0:
         return [], curve
+    cell = float(np.max(hi[0] - lo[0]))
+    near_lo, near_hi = lo[near], hi[near]
+    lo, hi = lo[~near], hi[~near]
 
     x = gauss_newton(surface, (lo + hi) / 2)
     size = box[:, 1] - box[:, 0]
@@ -307,7 +321,18 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
         x[again[good]] = y[good]
         ok[again[good]] = True
     x = x[ok]
-    cell = float(np.max(hi[0] - lo[0]))
+    if len(near_lo):
+        # Newton from the boxes round a traced curve ends on it (its pinch
+        # and triple points are the curve's special points, not isolated
+        # ones), in a few steps where it is near; the ends off it are
+        # points beside the curve.
+        y = gauss_newton(surface, (near_lo + near_hi) / 2, iterations=tol.CURVE_NEAR_STEPS[0])
+        off = tree.query(y)[0] > on_radius
+        y, near_lo, near_hi = y[off], near_lo[off], near_hi[off]
+        y = gauss_newton(surface, y, iterations=tol.CURVE_NEAR_STEPS[1])
+        off = tree.query(y)[0] > on_radius
+        good = accepted(y[off], near_lo[off], near_hi[off])
+        x = np.concatenate([x, y[off][good]])
     # Starts along a curve the clump test missed (a clump of candidates
     # spread over a sheet, where Newton across does not settle) end densely
     # along it: a chain of end points CURVE_SPAN boxes long.
@@ -322,30 +347,43 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
     limit = accept_residual(surface)
     found: list[SingularPoint] = []
     regions: list[tuple[np.ndarray, float]] = []   # centres and the radius their starts fall in
+    # Ends beside a traced curve that are not simple are that curve's (a
+    # special point its trace stopped short of: Crixxi's tangential
+    # meetings of cuspidal edges); the simple ones are points beside it.
+    # The curve test steps 4 and 8 boxes off: beside a curve it would land
+    # on it, so there the jet decides.
+    beside = (tree.query(x)[0] <= avoid_radius) if tree is not None else np.zeros(len(x), bool)
     # The curve test of every start, in one batch (a few are not needed).
-    along = _on_curve_many(surface, x, cell, steps=(4, 8))
+    along = np.zeros(len(x), bool)
+    along[~beside] = _on_curve_many(surface, x[~beside], cell, steps=(4, 8))
     # The first classification of every other start, in one batch (those
     # in the region of a point found before are not needed).
     first = iter(analyse_each(surface, x[~along]))
     # ... and their residuals (a node's centre is its start: most points).
     at_start = iter(residual_each(surface, x[~along]).tolist())
     with np.errstate(all="ignore"):
-        for p, on in zip(x, along.tolist()):
+        for p, on, by in zip(x, along.tolist(), beside.tolist()):
             known = None if on else next(first)
             r_start = None if on else next(at_start)
             if regions and (_lengths(p - np.array([c for c, _ in regions]))
                             <= np.array([r for _, r in regions])).any():
                 continue  # another start in the region of a point already centred
-            if on:
+            # The region of an end on a curve: its starts.  Beside a traced
+            # curve only the end itself (a node a cell off is not the curve's).
+            region = on_radius if by else 3.0 * cell
+            if on or (by and isinstance(known, tuple) and known[0].milnor is None):
                 # On a curve of singular points: not a point, and no need
                 # to classify it (the costliest kind to classify).
-                curve = True
-                regions.append((p, 3.0 * cell))
+                curve |= not by
+                regions.append((p, region))
                 continue
             try:
                 q, kind, _ = centre(surface, p, reach=2.0 * cell, limit=limit, first=known)
             except NotSingularError:
                 continue  # singular only to the loose test
+            if by and kind.milnor is None:
+                regions.append((q, region))
+                continue
             if kind.milnor is None and _on_curve(surface, q, cell, steps=(2, 4, 8)):
                 # Non-simple: on a curve of singular points (its neighbours
                 # are singular too), or an isolated point of higher type
@@ -359,8 +397,8 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
                 # tightly turning arc of a double curve: the rotated
                 # parabola's A12 to A15), but the locus goes on along the
                 # Hessian's kernel both ways: a curve, not a point.
-                curve = True
-                regions.append((q, 3.0 * cell))
+                curve |= not by
+                regions.append((q, region))
                 continue
             if not np.all((q >= box[:, 0] - margin) & (q <= box[:, 1] + margin)):
                 continue
