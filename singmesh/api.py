@@ -13,7 +13,7 @@ from threadpoolctl import ThreadpoolController
 
 from singmesh.boxes.edges import compute_events
 from singmesh.boxes.faces import face_links, leaf_sides, rail_links
-from singmesh.boxes.octree import refine_stars, subdivide
+from singmesh.boxes.octree import Octree, refine_stars, subdivide
 from singmesh.boxes.sizing import CurvatureSizing, sizing_levels
 from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
@@ -438,6 +438,19 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
                          raises + 1)
         except MemoryBudgetError:
             pass
+    # A surface thinner than a cell along a cuspidal edge (x^2 = z^3 - 5 z^4:
+    # a lens 0.04 wide and 0.2 tall round the edge, fuzz s3-925) is all
+    # tube, and its strips fail: the mesh is empty though F has both signs
+    # at the leaves' corners, well above rounding.  The lattice is made
+    # finer until the sheets are cells apart.  (Two planes 2e-10 apart,
+    # x^2 - 1e-20, have one sign only at rounding level: no retry there.)
+    if (not len(faces) and locus_curves and raises < tol.THIN_RETRIES and fine_level < tol.MAX_LEVEL
+            and _signs_resolved(surf, tree)):
+        try:
+            return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
+                         raises + 1)
+        except MemoryBudgetError:
+            pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings() + m.curve_warnings():
@@ -457,6 +470,19 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _signs_resolved(surface: Surface, tree: Octree) -> bool:
+    """Whether F takes both signs at the leaves' corners with values above ``SIGN_RESOLVED`` of the largest."""
+    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
+    corners = (tree.corner[:, None, :] + offsets[None] * tree.size[:, None, None]).reshape(-1, 3)
+    with np.errstate(all="ignore"):
+        f = surface(tree.lattice_to_space(np.unique(corners, axis=0)))
+    f = f[np.isfinite(f)]
+    if not len(f):
+        return False
+    floor = tol.SIGN_RESOLVED * float(np.abs(f).max())
+    return bool((f > floor).any() and (f < -floor).any())
 
 
 def _open_inside(m: Mesh) -> bool:

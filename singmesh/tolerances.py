@@ -184,6 +184,14 @@ CREASE_MAX_RAISE = 3
 #: the solid) each try costs four times the last for nothing.
 CREASE_RETRIES = 1
 
+#: An empty mesh of a surface with singular curves, where F has both signs
+#: at the leaves' corners above SIGN_RESOLVED of its largest value there,
+#: is meshed again with the fine level doubled, at most this many times
+#: (a lens 0.04 wide round a cuspidal edge, fuzz s3-925: fine 64 -> 512).
+THIN_RETRIES = 3
+#: ... (a sign seen only below this fraction is rounding: x^2 - 1e-20).
+SIGN_RESOLVED = 1e-10
+
 #: Points of the creases count as apart (for CREASE_MIN_GAP) when the way
 #: between them along the creases is longer than this times their
 #: distance: two creases meeting at a corner at more than ~40 degrees are

@@ -141,11 +141,13 @@ def mesh_quiet(text, box, **kw):
         return singmesh.mesh(text, box, **kw)
 
 
-def check_curve_mesh(text, box, components=1, half_sheets=None, oracle=None, **kw):
+def check_curve_mesh(text, box, components=1, half_sheets=None, oracle=None, samples=None, **kw):
     """The independent checks of the module docstring; returns the mesh and its line cells.
 
     ``oracle``: F as a sympy expression for the checks (default: ``text``
-    parsed), e.g. a rotated F composed rather than expanded (faster).
+    parsed), e.g. a rotated F composed rather than expanded (faster);
+    ``samples``: points of the singular curve known by construction (default:
+    :func:`singular_locus`'s, which converges slowly onto cuspidal edges).
     """
     m = mesh_quiet(text, box, **kw)
     text = text if oracle is None else oracle
@@ -179,7 +181,7 @@ def check_curve_mesh(text, box, components=1, half_sheets=None, oracle=None, **k
     # edge; next to special points edges of 8 to 14 still occur, issue #9.)
     assert n.max() <= 16, f"an edge of {n.max()} triangles"
     # The curve is followed by mesh edges between singular vertices, or by line cells.
-    samples = singular_locus(text, box)
+    samples = singular_locus(text, box) if samples is None else np.asarray(samples, float)
     inside = np.all((samples > box[:, 0] + 0.02 * size) & (samples < box[:, 1] - 0.02 * size), axis=1)
     samples = samples[inside]
     assert len(samples) >= 20, "the oracle found no curve: the case is wrong"
@@ -591,3 +593,37 @@ def test_every_curve_vertex_lies_on_the_curve_the_trace_start_too(text, axis, bo
     off = np.linalg.norm(np.delete(P, axis, axis=1), axis=1)
     assert len(P) >= 15  # the axis in the box, a vertex a cell or less apart
     assert off.max() <= 1e-9, np.sort(off)[-3:]
+
+
+def _lens(a: float, b: float, seed: int | None) -> tuple[str, np.ndarray]:
+    """x^2 = a z^3 - b z^4 (+ a twist): a lens about a fine cell wide round a cuspidal edge along y.
+
+    Widest at z = 3a/(4b): 0.04 across for (0.48, 2.4), 0.03 for (0.36, 2);
+    the fine cell at fine 64 on [-1, 1]^3 is 0.031.  ``seed``: float-rotated
+    and shifted (15 digits).  Returns the text and points of the edge.
+    """
+    text = f"x^2 - {a}*z^3 + {b}*z^4 + 0.3*x*y*z^2"
+    t = np.linspace(-1.5, 1.5, 301)[:, None]
+    if seed is None:
+        return text, t * np.array([0.0, 1.0, 0.0])
+    # The rotation and shift float_rotated draws: u = q (X - shift), the
+    # edge u = (0, t, 0) is X = shift + t q[1].
+    rng = np.random.default_rng(seed)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    shift = rng.uniform(-0.3, 0.3, 3)
+    return float_rotated(text, seed), shift + t * q[1]
+
+
+LENSES = [(a, b, seed) for a, b in ((0.48, 2.4), (0.36, 2.0)) for seed in (None, 3, 4)]
+
+
+@pytest.mark.parametrize("a, b, seed", LENSES, ids=[f"{a}-{b}-{s}" for a, b, s in LENSES])
+def test_lens_about_a_cell_wide_round_a_cuspidal_edge(a, b, seed):
+    # Fuzz s3-925: all of the surface lies in the cuspidal edge's tube, its
+    # strips fail, and the mesh was empty (said as "F and grad F vanish to
+    # rounding on more than points and curves", which is not so).
+    text, edge = _lens(a, b, seed)
+    box = np.array([(-1.0, 1.0)] * 3)
+    edge = edge[np.all((edge > box[:, 0]) & (edge < box[:, 1]), axis=1)]
+    m, _ = check_curve_mesh(text, box, components=1, half_sheets=2, samples=edge, coarse=8, fine=64)
+    assert m.stats["fine"] > 64, "meshed on a finer lattice than asked, where its sheets are apart"

@@ -942,7 +942,6 @@ OPEN_CASES = [
     (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
     (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
     (3, 818, "a double curve within 3 cells of a face: edges of three and five triangles"),
-    (3, 925, "a cuspidal edge: the mesh is refused as empty (F and grad F vanish to rounding on more than points)"),
     (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
     (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
             "four only on a product's curve; maybe its limit, not checked)"),
