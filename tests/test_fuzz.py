@@ -546,13 +546,6 @@ def _common_zeros(f1, f2, box, n: int = 41) -> np.ndarray:
     return p[ok]
 
 
-#: Not traced yet: keeping the short clusters and traces that reach the box
-#: (skeleton/singular_curves.py, tried) traced both, but broke fuzz s1-66
-#: and s1-350 (their newly traced arcs' tubes left edges of 3 triangles).
-SHORT_ARCS_TODO = "a double curve shorter than two trace steps is taken for an isolated point's samples"
-
-
-@pytest.mark.xfail(strict=True, reason=SHORT_ARCS_TODO)
 @pytest.mark.parametrize("name, text, box", SHORT_ARCS, ids=[c[0] for c in SHORT_ARCS])
 def test_short_arc_of_double_curve_is_traced(name, text, box):
     """The arc is followed by mesh edges with four triangles (two sheets
@@ -566,7 +559,12 @@ def test_short_arc_of_double_curve_is_traced(name, text, box):
     b = case.box_array()
     arc = _common_zeros(*(fc.Field(f) for f in case.factors), b)
     assert len(arc) >= 10
-    m = singmesh.mesh(text, box, coarse=8, fine=64)
+    # At fine 64 the arc is shorter than two trace steps and not traced;
+    # the mesh is made again at fine 128, where it is.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = singmesh.mesh(text, box, coarse=8, fine=64)
+    assert not [w for w in caught if "could not be traced" in str(w.message)]
     counts = mc.edge_counts(m.faces)
     edges = np.array([e for e, k in counts.items() if k == 4])
     assert len(edges), "no edge where the two sheets cross"
@@ -576,19 +574,6 @@ def test_short_arc_of_double_curve_is_traced(name, text, box):
     far = cKDTree(on).query(arc)[0]
     assert far.max() <= cell, f"arc points {far.max() / cell:.2g} cells from the crossing edges"
     assert fc.judge(case, 8, 64).status == "clean"
-
-
-@pytest.mark.parametrize("name, text, box", SHORT_ARCS, ids=[c[0] for c in SHORT_ARCS])
-def test_an_untraced_arc_is_said(name, text, box):
-    """Until such arcs are traced, a mesh that does not follow one says so
-    (a warning, not only a note in the report): never silently wrong."""
-    import singmesh
-
-    case = fc.case_from_text(name, text, box)
-    arc = _common_zeros(*(fc.Field(f) for f in case.factors), case.box_array())
-    assert len(arc) >= 10  # the arc is there (Newton on the two factors)
-    with pytest.warns(singmesh.SingularPointWarning, match="could not be traced"):
-        singmesh.mesh(text, box, coarse=8, fine=64)
 
 
 @pytest.mark.parametrize("seed, depth", [(11, 0.06), (11, 0.059), (11, 0.055), (11, 0.065), (12, 0.06)])
@@ -935,19 +920,16 @@ def test_double_curve_near_a_face(kind, depth, angle):
 OPEN_CASES = [
     (1, 270, "the loop of f1 = f2 = 0 has a cusp at the cubic cone's apex, where the double curve through it "
              "crosses: the loop's half-sheets are also that curve's, and their rails snap to it (open edges)"),
-    (3, 2, "a trace lost ('end of the trace'): open edges, edges of three triangles near the curve"),
     (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
     (3, 410, "a double curve within 3 cells of a face for half its length: edges of six triangles"),
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
     (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
-    (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
     (3, 818, "a double curve within 3 cells of a face: edges of three and five triangles"),
     (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
     (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
             "four only on a product's curve; maybe its limit, not checked)"),
     (4, 206, "a plane and a cubic: non-manifold edges"),
     (4, 210, "an edge of six triangles on the double curve"),
-    (4, 498, "two close vertices and open edges where the double curve nears the box's edge x = 1, y = -1"),
     (4, 542, "91 edges of three triangles"),
     (4, 850, "non-manifold edges in a random box"),
 ]
