@@ -16,7 +16,10 @@ from scipy.spatial import cKDTree
 from scipy.sparse.csgraph import connected_components
 
 from singmesh import tolerances as tol
+from singmesh import topology
 from singmesh.boxes.octree import Octree, containing_leaves
+
+from .cycles import Cycles
 
 
 def star_cubes(tree: Octree, links, points: np.ndarray, curve_points: np.ndarray | None = None) -> np.ndarray:
@@ -193,3 +196,107 @@ def short_stars(cycles, stars: dict, expected: list) -> list[int]:
     """
     counts = dict(zip(*np.unique(cycles.box, return_counts=True))) if len(cycles) else {}
     return [i for box, i in stars.items() if expected[i] is not None and counts.get(box, 0) < expected[i]]
+
+
+def part_branches(cycles, events, links, tree, stars: dict, points: list):
+    """The cycles with those of a two-branch point just inside a face of the box parted by branch.
+
+    The two branches of a node (or of an A_k with two sheets) lie on the
+    two sides of the plane through p across its axis: they meet only at p.
+    When p is less than a fine cell or two inside a face of the box, the
+    branches' traces on that face pass less than a square apart (a
+    hyperbola with its vertices within a cell of p), and the links there
+    may join the trace of one branch to the other's: one star cycle
+    through both branches, one fan instead of two.  Such a cycle is parted
+    at the links where it goes from one side to the other (those must lie
+    on the box's face): the events of each side, in cycle order, are a
+    cycle of their own, closed along the face by a link from one side's
+    run to its next.  A point within STAR_ON_BOX of the face is on it
+    (:func:`singmesh.facets.polygons.apex_pieces` cuts its cycles there).
+
+    Parameters
+    ----------
+    cycles : Cycles
+    events : Events
+    links : FaceLinks
+    tree : Octree
+    stars : dict
+        Box id of each star -> index of its singular point in ``points``.
+    points : list of SingularPoint
+
+    Returns
+    -------
+    Cycles
+        ``cycles`` itself when none is parted, else a copy with each parted
+        cycle replaced by its parts (in place, in cycle order).
+    """
+    from .polygons import _square_bounds_many  # (polygons imports this module)
+
+    box = tree.box
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    cell = float(np.max(tree.cell))
+    axes = {}
+    for b, i in stars.items():
+        kind = points[i].classification
+        p = points[i].point
+        if getattr(kind, "branches", None) != 2 or getattr(kind, "axis", None) is None:
+            continue
+        gap = np.minimum(p - box[:, 0], box[:, 1] - p).min()
+        if topology.on_box_boundary(p[None], box, tol.STAR_ON_BOX)[0] or gap > tol.BRANCHES_NEAR_FACE * cell:
+            continue
+        axes[b] = (p, np.asarray(kind.axis, float))
+    if not axes:
+        return cycles
+    parts = []
+    changed = False
+    for c in range(len(cycles)):
+        span = slice(cycles.offsets[c], cycles.offsets[c + 1])
+        ev, sq = cycles.events[span], cycles.squares[span]
+        b = int(cycles.box[c])
+        if b not in axes or len(ev) < 6:
+            parts.append((b, ev, sq))
+            continue
+        p, axis = axes[b]
+        side = (events.point[ev] - p) @ axis > 0
+        cross = np.flatnonzero(side != np.roll(side, -1))  # link j leaves event j
+        if len(cross) == 0:
+            parts.append((b, ev, sq))
+            continue
+        # The links that cross must lie on a face of the box (a cycle
+        # crossing elsewhere is no cone's there: left alone).
+        n, lo, _ = _square_bounds_many(tree, links.square[sq[cross]])
+        plane = lo[np.arange(len(cross)), n]
+        on_face = (np.abs(plane - box[n, 0]) <= tol.STAR_ON_BOX * size) \
+            | (np.abs(plane - box[n, 1]) <= tol.STAR_ON_BOX * size)
+        if not on_face.all() or min(side.sum(), (~side).sum()) < 3:
+            parts.append((b, ev, sq))
+            continue
+        # Each side from the event after a crossing on, in cycle order.
+        start = (cross[0] + 1) % len(ev)
+        order = np.roll(np.arange(len(ev)), -start)
+        pos = [np.flatnonzero(side[order] == s) for s in (side[start], not side[start])]
+        split = [order[k] for k in pos]
+        # The new links (the last event of each run of a side to the first
+        # of its next run, and the last to the first) must lie on one face
+        # of the box, as the links they replace do (near an edge of the
+        # box they may not: left alone).
+        ends = []
+        for k in pos:
+            gap = np.flatnonzero(np.diff(k) != 1)
+            ends.append(np.stack([np.append(k[gap], k[-1]), np.append(k[gap + 1], k[0])]))
+        ends = order[np.concatenate(ends, axis=1)]
+        q = events.point[ev[ends]]
+        faces = (np.abs(q[..., None] - box[None, None]) <= tol.STAR_ON_BOX * size).reshape(2, -1, 6)
+        if not (faces[0] & faces[1]).any(axis=1).all():
+            parts.append((b, ev, sq))
+            continue
+        parts += [(b, ev[idx], sq[idx]) for idx in split]
+        changed = True
+    if not changed:
+        return cycles
+    sizes = [len(e) for _, e, _ in parts]
+    return Cycles(box=np.array([b for b, _, _ in parts], np.int64),
+                  offsets=np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+                  events=np.concatenate([e for _, e, _ in parts]).astype(np.int64),
+                  squares=np.concatenate([q for _, _, q in parts]).astype(np.int64),
+                  broken_boxes=cycles.broken_boxes)

@@ -1023,3 +1023,11 @@ CURVE_FLAT = 1e-6
 #: tell the cone's two nappes apart that close to the apex); its edges to
 #: the box's face stay within the judges' 1e-9 of it.
 STAR_ON_BOX = 1e-10
+
+#: A two-branch point (a node, A_k with two sheets) further inside the box
+#: than STAR_ON_BOX but at most this many fine cells from a face of it: the
+#: links on that face pass its branches' traces less than a square apart
+#: and may join them into one star cycle (facets.stars.part_branches parts
+#: it again).  The star cube reaches a cell beyond its point, rounded
+#: outwards, so it meets the face up to two cells in.
+BRANCHES_NEAR_FACE = 2.0

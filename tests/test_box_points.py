@@ -264,3 +264,84 @@ def test_barth_sextic_cut_at_its_symmetry_planes(box):
     on_faces = (np.abs(truth[:, :, None] - lim[None]) <= 1e-9).any(axis=(1, 2))
     assert on_faces.sum() >= 6
     _nodes_right(text, box, expr, truth, 0.02)
+
+
+def _cones_just_inside_a_face(seed: int):
+    """Cones (float coefficients, 17 digits) with the apex 1e-9, 1e-7,
+    1e-5, 1e-3 and 0.3 fine cells (of 256) inside a face of [0, 1]^3 that
+    cuts both nappes (the face and its side drawn at random): (id, text,
+    matrix, apex, depth)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for depth in (1e-9, 1e-7, 1e-5, 1e-3, 0.3 / 256):
+        while True:
+            q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+            m = q @ np.diag(np.array([1.0, rng.uniform(0.3, 2), -rng.uniform(0.3, 2)]) * rng.choice([-1.0, 1.0])) @ q.T
+            axis, side = int(rng.integers(3)), int(rng.integers(2))
+            rest = [a for a in range(3) if a != axis]
+            # The face cuts both nappes (the cone restricted to it is
+            # indefinite), no box edge near the cone.
+            if np.linalg.det(m[np.ix_(rest, rest)]) < 0 and np.abs(np.diag(m)).min() >= 0.1:
+                break
+        p = rng.uniform(0.2, 0.8, 3)
+        p[axis] = 1.0 - depth if side else depth
+        v = [f"({c} - {float(a)!r})" for c, a in zip("xyz", p)]
+        text = " + ".join(f"{float(m[i, j] * (1 if i == j else 2))!r}*{v[i]}*{v[j]}" for i in range(3) for j in range(i, 3))
+        out.append(pytest.param(text, m, p, depth, id=f"{seed}-{depth:.3g}-{'xyz'[axis]}{'+' if side else '-'}"))
+    return out
+
+
+def _nappes_in_box(m, apex, box, radius: float) -> int:
+    """How many nappes of the cone d^T m d = 0 about ``apex`` have points
+    inside ``box`` at ``radius`` from the apex (a nappe is the side of the
+    plane across the axis, the eigenvector of m whose eigenvalue has the
+    sign the other two have not)."""
+    w, v = np.linalg.eigh(m)
+    odd = int(np.argmax(np.sign(w) != np.sign(np.sum(np.sign(w)))))
+    lat, lon = np.meshgrid(np.linspace(0, np.pi, 721), np.linspace(0, 2 * np.pi, 1441), indexing="ij")
+    u = np.stack([np.sin(lat) * np.cos(lon), np.sin(lat) * np.sin(lon), np.cos(lat)], axis=-1)
+    g = np.einsum("...i,ij,...j->...", u, m, u)
+    change = np.zeros(g.shape, bool)
+    change[:-1] |= np.sign(g[:-1]) != np.sign(g[1:])
+    change[:, :-1] |= np.sign(g[:, :-1]) != np.sign(g[:, 1:])
+    q = apex + radius * u[change]
+    lim = np.asarray(box, float)
+    inside = ((q >= lim[:, 0]) & (q <= lim[:, 1])).all(axis=1)
+    return len(np.unique(np.sign(u[change][inside] @ v[:, odd])))
+
+
+@pytest.mark.parametrize("text, m, apex, depth", _cones_just_inside_a_face(31) + _cones_just_inside_a_face(32)
+                         + _cones_just_inside_a_face(33))
+def test_cones_with_the_apex_just_inside_a_face(text, m, apex, depth):
+    # The apex is inside the box: there the surface is the whole cone, two
+    # nappes meeting only at the apex (the sphere oracle inside the box
+    # counts 2), the face cutting them further out.  Each nappe that
+    # reaches beyond a cell is one fan closed round the apex (a face
+    # cutting a nappe in a small ellipse round the apex leaves a cap of it
+    # about a cell wide or less, which the lattice may not see).
+    # The links on the face pass the nappes' traces less than a square
+    # apart and used to join them into one cycle: one fan for both.
+    box = ((0.0, 1.0),) * 3
+
+    def f(r):
+        d = r - apex
+        return np.einsum("...i,ij,...j->...", d, m, d)
+
+    assert branches_on_sphere(f, apex, 0.5 * depth, 240, 480, box=box) == 2
+    want = _nappes_in_box(m, apex, box, 0.02)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always", singmesh.SingularPointWarning)
+        mesh = singmesh.mesh(text, box)
+    if want == 2:
+        assert not [w for w in said if issubclass(w.category, singmesh.SingularPointWarning)]
+    d = np.linalg.norm(mesh.vertices - apex, axis=1)
+    assert int((d <= 1e-9).sum()) == 1
+    i = int(np.argmin(d))
+    # (A cap the lattice sees is meshed: its fan is right too.)
+    assert fans_at(mesh.faces, i) in {want, 2}
+    assert not boundary_edges_off_box(mesh.vertices, mesh.faces, box)
+    assert not non_manifold_edges(mesh.faces)
+    # Each fan closed round the apex: no edge at it on one triangle only.
+    from meshcheck import boundary_edges
+
+    assert not [e for e in boundary_edges(mesh.faces) if i in e]
