@@ -176,6 +176,108 @@ def stray_cycles(cycles, events, stars: dict, expected: list) -> np.ndarray:
     return stray
 
 
+def face_slivers(surf, cycles, events, tree, stars: dict, points: list) -> np.ndarray:
+    """Cycles of a star round a point on the box's boundary that lie flat on a face, cut off from the point.
+
+    A star on a face of the box is as large as the leaves round its point
+    that failed the simplicity test (up to STAR_REACH): round a D4 point
+    that is many cells, and a sheet near the point's tangent plane can
+    graze a face of the box inside the star away from the point, crossing
+    it in a small closed curve there.  The star then has a cycle within a
+    fraction of a cell of that face, all of it several cells from the
+    point: a small disc cut off by the face, not a piece through the point
+    (the sphere oracle finds no such piece on smaller spheres round it).
+    Fanned into the point it is one fan too many (two for a D4 point on an
+    edge of the box with one piece inside it); it is meshed as a plain
+    facet instead, as a stray cycle is (:func:`stray_cycles`).  So is a
+    cycle of two events there (a bubble across one lattice edge of a side
+    of the star: two roots on it, a link each way), which has no area.  A
+    sheet through the point lying along the face (less than a cell off it)
+    is cut by it into many flat cycles in a row from the point out: those
+    chained to one near the point are kept.  A piece
+    through the point that hugs the face looks the same on the star's
+    boundary, but its trace on the face (F = 0 there) runs to the point:
+    the trace is sampled at an eighth of a cell on the face round the
+    point, and a cycle whose events on the face lie on a component of it
+    that reaches within two cells of the point is kept.
+
+    Returns
+    -------
+    (C,) bool    the cycles to mesh as plain facets
+    """
+    from scipy import ndimage
+
+    out = np.zeros(len(cycles), bool)
+    box = tree.box
+    cell = float(np.max(tree.cell))
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    planes = {}
+    for b, i in stars.items():
+        p = points[i].point
+        on = np.abs(p[:, None] - box) <= tol.STAR_ON_BOX * size
+        if on.any():
+            planes[b] = (p, [(int(a), float(box[a, k])) for a, k in zip(*np.nonzero(on))])
+    for b, (p, faces) in planes.items():
+        mine = np.flatnonzero(cycles.box == b)
+        pts = [events.point[cycles.events[cycles.offsets[c]:cycles.offsets[c + 1]]] for c in mine]
+        far = np.array([np.linalg.norm(q - p, axis=1).min() > tol.SLIVER_FAR * cell for q in pts], bool)
+        flat = np.array([any(np.abs(q[:, a] - v).max() <= tol.SLIVER_FLAT * cell for a, v in faces) for q in pts], bool)
+        # A sheet through the point lying along the face is cut by it into
+        # many flat cycles in a row from the point outwards: those chained
+        # (events within SLIVER_CHAIN cells) to a flat cycle near the point
+        # are kept.
+        chain = np.flatnonzero(flat)
+        near_p = np.zeros(len(mine), bool)
+        if len(chain):
+            owner = np.repeat(chain, [len(pts[k]) for k in chain])
+            pairs = cKDTree(np.concatenate([pts[k] for k in chain])).query_pairs(tol.SLIVER_CHAIN * cell, output_type="ndarray")
+            n = len(mine)
+            adj = coo_matrix((np.ones(len(pairs)), (owner[pairs[:, 0]], owner[pairs[:, 1]])), shape=(n, n))
+            _, label = connected_components(adj, directed=False)
+            anchored = np.unique(label[chain[~far[chain]]])
+            near_p[chain] = np.isin(label[chain], anchored)
+        bubble = np.array([len(q) == 2 for q in pts], bool)
+        for k in np.flatnonzero(far & ~near_p & (flat | bubble)).tolist():
+            q = pts[k]
+            # A bubble of the surface across one lattice edge of the star's
+            # side (two roots on it, a link each way) has no area; a flat
+            # cycle whose trace on the face runs to the point is kept.
+            out[mine[k]] = len(q) == 2 or not any(
+                _trace_reaches(surf, p, a, v, q[np.abs(q[:, a] - v) <= tol.STAR_ON_BOX * size], box, cell, ndimage)
+                for a, v in faces)
+    return out
+
+
+def _trace_reaches(surf, p, a: int, v: float, starts: np.ndarray, box: np.ndarray, cell: float, ndimage) -> bool:
+    """Whether F = 0 on the face x_a = v joins a point of ``starts`` to the point p (see :func:`face_slivers`)."""
+    if not len(starts):
+        return False
+    u, w = [k for k in range(3) if k != a]
+    reach = np.abs(starts[:, [u, w]] - p[[u, w]]).max() + cell
+    h = cell / tol.SLIVER_SAMPLES
+    axes = [np.arange(max(box[k, 0], p[k] - reach), min(box[k, 1], p[k] + reach) + 0.5 * h, h) for k in (u, w)]
+    grid = np.zeros((len(axes[0]), len(axes[1]), 3))
+    grid[..., a] = v
+    grid[..., u], grid[..., w] = np.meshgrid(axes[0], axes[1], indexing="ij")
+    pos = surf(grid) > 0
+    # Squares of the sampling grid with both signs at their corners: the trace.
+    crossed = ~((pos[:-1, :-1] == pos[1:, :-1]) & (pos[:-1, :-1] == pos[:-1, 1:]) & (pos[:-1, :-1] == pos[1:, 1:]))
+    label, _ = ndimage.label(crossed, structure=np.ones((3, 3)))
+
+    def squares_at(pts):
+        ij = [np.clip(((pts[:, k] - axes[n][0]) // h).astype(np.int64), 0, crossed.shape[n] - 1)
+              for n, k in enumerate((u, w))]
+        return ij
+
+    # The trace next to the point (two cells round it: the arcs of a
+    # cusp there are closer than the sampling).
+    ci, cj = np.meshgrid(axes[0][:-1] + 0.5 * h, axes[1][:-1] + 0.5 * h, indexing="ij")
+    near = np.maximum(np.abs(ci - p[u]), np.abs(cj - p[w])) <= tol.SLIVER_NEAR * cell
+    at_p = set(np.unique(label[near & crossed]).tolist()) - {0}
+    si, sj = squares_at(starts)
+    return bool(at_p & set(label[si, sj].tolist()))
+
+
 def short_stars(cycles, stars: dict, expected: list) -> list[int]:
     """Points whose star has fewer link cycles than the branches they have.
 
