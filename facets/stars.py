@@ -11,6 +11,7 @@ operations, so hundreds of nodes cost no more than a few.
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.spatial import cKDTree
 from scipy.sparse.csgraph import connected_components
@@ -191,22 +192,21 @@ def face_slivers(surf, cycles, events, tree, stars: dict, points: list) -> np.nd
     edge of the box with one piece inside it); it is meshed as a plain
     facet instead, as a stray cycle is (:func:`stray_cycles`).  So is a
     cycle of two events there (a bubble across one lattice edge of a side
-    of the star: two roots on it, a link each way), which has no area.  A
-    sheet through the point lying along the face (less than a cell off it)
-    is cut by it into many flat cycles in a row from the point out: those
-    chained to one near the point are kept.  A piece
-    through the point that hugs the face looks the same on the star's
-    boundary, but its trace on the face (F = 0 there) runs to the point:
-    the trace is sampled at an eighth of a cell on the face round the
-    point, and a cycle whose events on the face lie on a component of it
-    that reaches within two cells of the point is kept.
+    of the star: two roots on it, a link each way), which has no area.
+
+    A piece through the point that hugs the face looks the same on the
+    star's boundary, but its trace on the face (F = 0 there) runs to the
+    point: the trace is sampled at an eighth of a cell on the face round
+    the point, and a cycle whose events on the face lie on a component of
+    it that reaches within two cells of the point is kept.  A sheet
+    through the point lying along the face (less than a cell off it) is
+    cut by it into many flat cycles in a row from the point out: those
+    chained to one near the point are kept too.
 
     Returns
     -------
     (C,) bool    the cycles to mesh as plain facets
     """
-    from scipy import ndimage
-
     out = np.zeros(len(cycles), bool)
     box = tree.box
     cell = float(np.max(tree.cell))
@@ -243,12 +243,12 @@ def face_slivers(surf, cycles, events, tree, stars: dict, points: list) -> np.nd
             # side (two roots on it, a link each way) has no area; a flat
             # cycle whose trace on the face runs to the point is kept.
             out[mine[k]] = len(q) == 2 or not any(
-                _trace_reaches(surf, p, a, v, q[np.abs(q[:, a] - v) <= tol.STAR_ON_BOX * size], box, cell, ndimage)
+                _trace_reaches(surf, p, a, v, q[np.abs(q[:, a] - v) <= tol.STAR_ON_BOX * size], box, cell)
                 for a, v in faces)
     return out
 
 
-def _trace_reaches(surf, p, a: int, v: float, starts: np.ndarray, box: np.ndarray, cell: float, ndimage) -> bool:
+def _trace_reaches(surf, p, a: int, v: float, starts: np.ndarray, box: np.ndarray, cell: float) -> bool:
     """Whether F = 0 on the face x_a = v joins a point of ``starts`` to the point p (see :func:`face_slivers`)."""
     if not len(starts):
         return False
@@ -263,18 +263,13 @@ def _trace_reaches(surf, p, a: int, v: float, starts: np.ndarray, box: np.ndarra
     # Squares of the sampling grid with both signs at their corners: the trace.
     crossed = ~((pos[:-1, :-1] == pos[1:, :-1]) & (pos[:-1, :-1] == pos[:-1, 1:]) & (pos[:-1, :-1] == pos[1:, 1:]))
     label, _ = ndimage.label(crossed, structure=np.ones((3, 3)))
-
-    def squares_at(pts):
-        ij = [np.clip(((pts[:, k] - axes[n][0]) // h).astype(np.int64), 0, crossed.shape[n] - 1)
-              for n, k in enumerate((u, w))]
-        return ij
-
     # The trace next to the point (two cells round it: the arcs of a
     # cusp there are closer than the sampling).
     ci, cj = np.meshgrid(axes[0][:-1] + 0.5 * h, axes[1][:-1] + 0.5 * h, indexing="ij")
     near = np.maximum(np.abs(ci - p[u]), np.abs(cj - p[w])) <= tol.SLIVER_NEAR * cell
     at_p = set(np.unique(label[near & crossed]).tolist()) - {0}
-    si, sj = squares_at(starts)
+    si, sj = [np.clip(((starts[:, k] - axes[n][0]) // h).astype(np.int64), 0, crossed.shape[n] - 1)
+              for n, k in enumerate((u, w))]
     return bool(at_p & set(label[si, sj].tolist()))
 
 
