@@ -18,7 +18,7 @@ from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 
 from .fans import insert_link_nodes, sector_polygons_many
-from .stars import stray_cycles
+from .stars import face_slivers, stray_cycles
 from .tubes import tube_triangles
 
 
@@ -81,6 +81,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
     sizes = np.diff(cycles.offsets)
     plain = ~np.isin(cycles.box, list(stars))
     plain |= stray_cycles(cycles, events, stars, expected)
+    plain |= face_slivers(surf, cycles, events, tree, stars, points)
     tube = cycles.box == tube_id  # meshed as strips
     plain &= ~tube
     ev = cycles.events
@@ -213,6 +214,14 @@ def apex_pieces(cycles, events, links, tree, stars: dict, points: list, star_cyc
         span = slice(cycles.offsets[c], cycles.offsets[c + 1])
         ev = cycles.events[span]
         n = len(ev)
+        flat = np.abs(events.point[ev] - p) <= tol.STAR_ON_BOX * size
+        on_axes = (np.abs(p - box[:, 0]) <= tol.STAR_ON_BOX * size) | (np.abs(p - box[:, 1]) <= tol.STAR_ON_BOX * size)
+        if (flat.all(axis=0) & on_axes).any():
+            # All of it on a face of the box through the point (a sliver of
+            # the surface along the face, crossing a side of the star): a
+            # fan over it would lie in the face, with no area off it.
+            through.append((c, []))
+            continue
         # Link j leaves event j, on its contact square.
         axis, lo, hi = _square_bounds_many(tree, links.square[cycles.squares[span]])
         on_face = np.abs(lo[np.arange(n), axis] - p[axis]) <= tol.STAR_ON_BOX * size

@@ -19,7 +19,7 @@ from singmesh.facets.assemble import assemble
 from singmesh.facets.cycles import box_links, find_cycles
 from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, point_key
 from singmesh.facets.records import curve_graph, curve_records
-from singmesh.facets.stars import group_stars, short_stars, shrink_cubes, star_cubes
+from singmesh.facets.stars import group_stars, part_branches, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
 from singmesh.facets.coarsen import coarsen_crease_mesh
 from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions, untraced_points
@@ -332,6 +332,9 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             group[tube_leaves(tree, links, curves)] = tube_id
         grouped = box_links(links, group)
         cycles = find_cycles(*grouped, n_events=len(events.key))
+        # A node just inside a face of the box: the links there may join its
+        # two branches into one cycle.
+        cycles = part_branches(cycles, events, links, tree, stars, points)
         # A star too large for the cone over its boundary to be the surface
         # in it joins branches: fewer link cycles than the classifier's
         # branches.  Those stars shrink by half and are meshed again.

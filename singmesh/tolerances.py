@@ -1045,3 +1045,34 @@ CURVE_FLAT = 1e-6
 #: tell the cone's two nappes apart that close to the apex); its edges to
 #: the box's face stay within the judges' 1e-9 of it.
 STAR_ON_BOX = 1e-10
+
+#: A two-branch point (a node, A_k with two sheets) further inside the box
+#: than STAR_ON_BOX but at most this many fine cells from a face of it: the
+#: links on that face pass its branches' traces less than a square apart
+#: and may join them into one star cycle (facets.stars.part_branches parts
+#: it again).  The star cube reaches a cell beyond its point, rounded
+#: outwards, so it meets the face up to two cells in.
+BRANCHES_NEAR_FACE = 2.0
+
+#: A cycle of the star of a point on the box's boundary lying within this
+#: many fine cells of one face of the box through the point ...
+SLIVER_FLAT = 0.5
+#: ... and nowhere nearer the point than this many fine cells may be a
+#: small disc of surface grazing that face, not a piece through the point
+#: (facets.stars.face_slivers).  The traces on the face of the pieces
+#: through the point come to it, joined at most a cell or two from it
+#: (a node, A_k) or where the two arcs of a cusp of the trace are a cell
+#: apart (D4: 2 to 10 cells); the slivers seen on D4 stars lay 7 to 16
+#: cells from their point, within 0.25 of a cell of the face.
+SLIVER_FAR = 4.0
+#: Such a cycle is a piece through the point after all when F = 0 on the
+#: face, sampled at 1/SLIVER_SAMPLES of a fine cell, joins its events on
+#: the face to the trace within SLIVER_NEAR cells of the point (nearer,
+#: the arcs of a D4's cusp of the trace are closer than the sampling).
+SLIVER_SAMPLES = 8
+SLIVER_NEAR = 2.0
+#: Flat cycles of one star with events this many fine cells apart or less
+#: are pieces of one sheet along the face (facets.stars.face_slivers): the
+#: pieces of a sheet less than a cell off the face, cut by it, lie a cell
+#: or so apart in a row.
+SLIVER_CHAIN = 1.5
