@@ -1026,3 +1026,48 @@ def test_events_on_segments_in_chunks_are_those_in_one_go(tree_of, monkeypatch):
         monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", chunk)
         got = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def _dedupe_loop(x, radius, key=None, spans=False):
+    """singular._dedupe as it was: one cluster at a time (the reference)."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
+
+    labels = fcluster(linkage(pdist(x), method="single"), t=radius, criterion="distance")
+    reps, extent = [], []
+    for lab in np.unique(labels):
+        sel = labels == lab
+        members = x[sel]
+        extent.append(np.ptp(members, axis=0).max())
+        if key is not None:
+            reps.append(members[np.lexsort((members[:, 2], members[:, 1], members[:, 0], key[sel]))[0]])
+            continue
+        c = members.mean(axis=0)
+        reps.append(members[np.argmin(np.linalg.norm(members - c, axis=1))])
+    reps = np.array(reps)
+    order = np.lexsort(reps.T[::-1])
+    return (reps[order], np.array(extent)[order]) if spans else reps[order]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dedupe_of_all_clusters_at_once_is_the_loop(seed):
+    """singular._dedupe picks every cluster's representative in one batch: the points and
+    extents the loop over clusters gives, bit for bit: Newton end points about nodes
+    (clusters of 1 to 300 members 1e-13 apart, float coordinates), ties in the key and in
+    the distance to the centre, one cluster, all apart, a point given twice."""
+    from singmesh.skeleton.singular import _dedupe
+
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(size=(int(rng.integers(1, 6 if seed == 0 else 60)), 3)) * 10.0 ** rng.integers(-2, 3)
+    sizes = rng.integers(1, 300 if seed == 0 else 12, len(centres))
+    x = np.concatenate([c + rng.normal(size=(k, 3)) * 1e-13 * (1 + np.abs(c)) for c, k in zip(centres, sizes)])
+    x = x[rng.permutation(len(x))]
+    x[-1] = x[0]  # a point twice
+    sym = np.concatenate([x[:4], -x[:4]])  # a cluster symmetric about its centre: equal distances
+    key = np.round(rng.random(len(x)), 1)  # ties in the key
+    for pts, radius in [(x, 1e-7), (x, 1e-16), (x, 1e6), (sym, 1e6)]:
+        k = key[:len(pts)]
+        for kw in [{}, {"key": k}, {"spans": True}, {"key": k, "spans": True}]:
+            got, want = _dedupe(pts, radius, **kw), _dedupe_loop(pts, radius, **kw)
+            for g, w in zip(got if kw.get("spans") else [got], want if kw.get("spans") else [want]):
+                assert g.shape == w.shape and np.array_equal(g, w) and g.tobytes() == w.tobytes()
