@@ -94,6 +94,26 @@ class Octree:
     def leaf_keys(self) -> np.ndarray:
         return node_keys(self.level, self.corner >> (self.fine_level - self.level)[:, None])
 
+    def sorted_leaf_keys(self) -> tuple[np.ndarray, np.ndarray]:
+        """``order = np.argsort(leaf_keys())`` and the keys in that order, made once per tree.
+
+        The leaf look-ups (:meth:`find_leaves`, :func:`containing_leaves`)
+        each sorted the keys again: twice per tree in a mesh.  The keys are
+        distinct, so the order is the same whichever sort made it.  Kept
+        with the ``level`` and ``corner`` arrays they were made from (a tree
+        given new ones makes them again).
+        """
+        kept = self.__dict__.get("_sorted_keys")
+        if kept is None or kept[0] is not self.level or kept[1] is not self.corner:
+            keys = self.leaf_keys()
+            order = np.argsort(keys)
+            sorted_keys = keys[order]
+            order.setflags(write=False)
+            sorted_keys.setflags(write=False)
+            kept = (self.level, self.corner, order, sorted_keys)
+            self.__dict__["_sorted_keys"] = kept
+        return kept[2], kept[3]
+
     def find_leaves(self, doubled: np.ndarray) -> np.ndarray:
         """Index of the leaf containing each point, or -1.
 
@@ -104,9 +124,7 @@ class Octree:
             lie strictly inside one leaf (never on a face), as face centres
             pushed half a cell off the face do.
         """
-        keys = self.leaf_keys()
-        order = np.argsort(keys)
-        sorted_keys = keys[order]
+        order, sorted_keys = self.sorted_leaf_keys()
         found = np.full(len(doubled), -1, dtype=np.int64)
         todo = np.arange(len(doubled))
         for lvl in np.unique(self.level).tolist():
@@ -139,9 +157,7 @@ def containing_leaves(tree: Octree, points: np.ndarray, rel: float = 1e-9) -> tu
     top = 1 << tree.fine_level
     inside = ((probes >= 0) & (probes < top)).all(axis=1)
     probes, owner = probes[inside], owner[inside]
-    keys = tree.leaf_keys()
-    order = np.argsort(keys)
-    sorted_keys = keys[order]
+    order, sorted_keys = tree.sorted_leaf_keys()
     found = np.full(len(probes), -1, np.int64)
     for lvl in np.unique(tree.level).tolist():
         cell = np.floor(probes / (1 << (tree.fine_level - lvl))).astype(np.int64)
