@@ -1071,3 +1071,52 @@ def test_dedupe_of_all_clusters_at_once_is_the_loop(seed):
             got, want = _dedupe(pts, radius, **kw), _dedupe_loop(pts, radius, **kw)
             for g, w in zip(got if kw.get("spans") else [got], want if kw.get("spans") else [want]):
                 assert g.shape == w.shape and np.array_equal(g, w) and g.tobytes() == w.tobytes()
+
+
+def test_short_stars_by_sorted_boxes_is_the_count_table():
+    """stars.short_stars counts the star boxes' cycles by binary search in the sorted
+    boxes: the points the table of every box's count gives, in the stars' order (boxes
+    with no cycle, unknown branch counts, stars given in any order, no cycles at all)."""
+    from singmesh.facets.stars import short_stars
+
+    rng = np.random.default_rng(9)
+    for n_cycles in [0, 1, 40, 12000]:
+        box = rng.integers(0, 300, n_cycles)
+        ids = rng.permutation(np.arange(250, 320))[:50].tolist()
+        stars = {b: i for i, b in enumerate(ids)}
+        expected = [None if rng.random() < 0.2 else int(rng.integers(0, 4)) for _ in ids]
+        cycles = type("Cycles", (), {"box": box, "__len__": lambda self: len(self.box)})()
+        counts = dict(zip(*np.unique(box, return_counts=True))) if len(box) else {}
+        want = [i for b, i in stars.items() if expected[i] is not None and counts.get(b, 0) < expected[i]]
+        assert short_stars(cycles, stars, expected) == want
+    assert short_stars(cycles, {}, []) == []
+
+
+def test_sorted_leaf_keys_are_made_once_per_tree(tree_of):
+    """Octree.sorted_leaf_keys: the argsort of the leaf keys and the sorted keys, made once
+    per tree (the same arrays the next time, read-only) and again for a tree with other
+    leaves; the leaf look-ups give what they gave with the keys sorted at each call."""
+    from dataclasses import replace
+
+    from singmesh.boxes.octree import containing_leaves
+
+    _, tree = tree_of
+    keys = tree.leaf_keys()
+    order, sk = tree.sorted_leaf_keys()
+    assert np.array_equal(sk, np.sort(keys)) and np.array_equal(keys[order], sk)
+    again = tree.sorted_leaf_keys()
+    assert again[0] is order and again[1] is sk and not order.flags.writeable
+    other = replace(tree, level=tree.level[::-1].copy(), corner=tree.corner[::-1].copy())
+    o2, s2 = other.sorted_leaf_keys()
+    assert np.array_equal(s2, sk) and np.array_equal(other.leaf_keys()[o2], s2) and not np.array_equal(o2, order)
+    rng = np.random.default_rng(2)
+    pts = tree.box[:, 0] + rng.random((200, 3)) * (tree.box[:, 1] - tree.box[:, 0])
+    first = containing_leaves(tree, pts)
+    second = containing_leaves(tree, pts)
+    assert all(np.array_equal(a, b) for a, b in zip(first, second))
+    doubled = 2 * np.floor((pts - tree.box[:, 0]) / tree.cell).astype(np.int64) + 1
+    found = tree.find_leaves(doubled)
+    lo, hi = 2 * tree.corner, 2 * (tree.corner + tree.size[:, None])
+    inside = ((lo[None] < doubled[:, None]) & (doubled[:, None] < hi[None])).all(axis=2)  # (points, leaves)
+    want = np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+    assert np.array_equal(found, want) and (found >= 0).any() and (found < 0).any()
