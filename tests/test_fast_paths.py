@@ -1120,3 +1120,22 @@ def test_sorted_leaf_keys_are_made_once_per_tree(tree_of):
     inside = ((lo[None] < doubled[:, None]) & (doubled[:, None] < hi[None])).all(axis=2)  # (points, leaves)
     want = np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
     assert np.array_equal(found, want) and (found >= 0).any() and (found < 0).any()
+
+
+def test_pieces_from_two_sides_of_each_triangle_are_those_of_three():
+    """lattice_specks labels the mesh's pieces from two sides of each triangle: the count
+    and the labels of the pieces from all three sides, on a float-rotated mesh of two
+    spheres (two pieces) plus random triangles over few vertices (many small pieces)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = singmesh.mesh("((x-0.5)^2+y^2+z^2-0.1)*((x+0.5)^2+y^2+z^2-0.1)*1.000000000000001", ((-1, 1),) * 3,
+                      coarse=16, fine=32)
+    rng = np.random.default_rng(6)
+    for faces, n in [(np.asarray(m.faces), len(m.vertices)), (rng.integers(0, 500, (300, 3)), 500)]:
+        a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
+        three = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+        two = (np.concatenate([faces[:, 0], faces[:, 1]]), np.concatenate([faces[:, 1], faces[:, 2]]))
+        got = connected_components(coo_matrix((np.ones(len(two[0]), np.int8), two), shape=(n, n)), directed=False)
+        assert got[0] == three[0] and np.array_equal(got[1], three[1])
+    assert three[0] > 50
