@@ -1139,3 +1139,71 @@ def test_pieces_from_two_sides_of_each_triangle_are_those_of_three():
         got = connected_components(coo_matrix((np.ones(len(two[0]), np.int8), two), shape=(n, n)), directed=False)
         assert got[0] == three[0] and np.array_equal(got[1], three[1])
     assert three[0] > 50
+
+
+def _insert_link_nodes_loop(offsets, keys, points, squares, splits):
+    """fans.insert_link_nodes as it was: one insertion at a time (the reference)."""
+    if not splits:
+        return offsets, keys, points
+    n = len(keys)
+    poly = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    nxt = np.arange(n) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    split_squares = np.array(sorted({q for q, _, _ in splits}), dtype=np.int64)
+    cand = np.nonzero(np.isin(squares, split_squares))[0]
+    insert_after = {}
+    for i in cand.tolist():
+        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))
+        if link in splits:
+            insert_after[i] = splits[link][::-1]
+    if not insert_after:
+        return offsets, keys, points
+    out_k, out_p, sizes = [], [], np.diff(offsets).copy()
+    last = 0
+    for i in sorted(insert_after):
+        out_k.append(keys[last:i + 1])
+        out_p.append(points[last:i + 1])
+        ins = insert_after[i]
+        out_k.append(np.array([k for k, _ in ins], np.int64))
+        out_p.append(np.array([q for _, q in ins]))
+        sizes[poly[i]] += len(ins)
+        last = i + 1
+    out_k.append(keys[last:])
+    out_p.append(points[last:])
+    return np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(out_k), np.concatenate(out_p)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_link_nodes_inserted_at_once_are_those_one_by_one(seed):
+    """fans.insert_link_nodes puts every subdivided link's nodes into the polygons across
+    in one np.insert: the polygons of the insertion one by one, bit for bit (links with one
+    to three nodes, at a polygon's last vertex (its closing link), links on other squares
+    or the other way round (no insertion), splits matching nothing, none at all)."""
+    from singmesh.facets.fans import insert_link_nodes
+
+    rng = np.random.default_rng(seed)
+    sizes = rng.integers(3, 9, 400)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    n = int(offsets[-1])
+    keys = rng.integers(-5, 4000, n)
+    points = rng.normal(size=(n, 3))
+    squares = np.where(rng.random(n) < 0.4, rng.integers(0, 50, n), -1)
+    nxt = np.arange(n) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    splits, key = {}, 10 ** 6
+    for i in rng.choice(np.flatnonzero(squares >= 0), 120, replace=False).tolist():
+        k = int(rng.integers(1, 4))
+        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))
+        if rng.random() < 0.2:
+            link = (link[0] + 1, link[1], link[2])  # another square: no insertion
+        elif rng.random() < 0.2:
+            link = (link[0], link[2], link[1])  # the same way round: no insertion
+        splits[link] = [(key + j, rng.normal(size=3)) for j in range(k)]
+        key += k
+    splits[(7, -99, -98)] = [(key, np.zeros(3))]
+    for sp in [splits, {}, {(7, -99, -98): [(1, np.zeros(3))]}]:
+        got = insert_link_nodes(offsets, keys, points, squares, sp)
+        want = _insert_link_nodes_loop(offsets, keys, points, squares, sp)
+        for g, w in zip(got, want):
+            assert g.dtype == w.dtype and np.array_equal(g, w) and g.tobytes() == w.tobytes()
+    assert len(insert_link_nodes(offsets, keys, points, squares, splits)[1]) > n
