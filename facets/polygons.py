@@ -80,7 +80,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
         the tube's strips, made later, read it: :func:`add_strips`).
     """
     sizes = np.diff(cycles.offsets)
-    plain = ~np.isin(cycles.box, list(stars))
+    plain = ~np.isin(cycles.box, np.fromiter(stars, np.int64, len(stars)))
     plain |= stray_cycles(cycles, events, stars, expected)
     tube = cycles.box == tube_id  # meshed as strips
     plain &= ~tube

@@ -160,7 +160,7 @@ def stray_cycles(cycles, events, stars: dict, expected: list) -> np.ndarray:
     and are meshed as plain facets, not fanned into the point.
     """
     stray = np.zeros(len(cycles), bool)
-    star_cycles = np.nonzero(np.isin(cycles.box, list(stars)))[0]
+    star_cycles = np.nonzero(np.isin(cycles.box, np.fromiter(stars, np.int64, len(stars))))[0]
     for box in np.unique(cycles.box[star_cycles]).tolist():
         want = expected[stars[box]]
         mine = star_cycles[cycles.box[star_cycles] == box]
