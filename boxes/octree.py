@@ -114,7 +114,7 @@ class Octree:
             self.__dict__["_sorted_keys"] = kept
         return kept[2], kept[3]
 
-    def find_leaves(self, doubled: np.ndarray) -> np.ndarray:
+    def find_leaves(self, doubled: np.ndarray, guess: np.ndarray | None = None) -> np.ndarray:
         """Index of the leaf containing each point, or -1.
 
         Parameters
@@ -123,10 +123,23 @@ class Octree:
             Twice the lattice coordinates of the query points; a point must
             lie strictly inside one leaf (never on a face), as face centres
             pushed half a cell off the face do.
+        guess : (K,) int64, optional
+            A level to look at first for each point (where its leaf likely
+            is); the others are looked at after, as without.  Leaves do not
+            overlap: the same leaves either way, with fewer look-ups where
+            the guesses are good.
         """
         order, sorted_keys = self.sorted_leaf_keys()
         found = np.full(len(doubled), -1, dtype=np.int64)
         todo = np.arange(len(doubled))
+        if guess is not None and len(todo):
+            # Each point at its own guessed level: one look-up of all keys.
+            guess = np.asarray(guess, np.int64)
+            q = node_keys(guess, doubled >> (self.fine_level - guess + 1)[:, None])
+            pos = np.minimum(search_sorted(sorted_keys, q), len(sorted_keys) - 1)
+            hit = sorted_keys[pos] == q
+            found[hit] = order[pos[hit]]
+            todo = todo[~hit]
         for lvl in np.unique(self.level).tolist():
             # Only the points no leaf of another level holds yet.
             shift = self.fine_level - lvl + 1

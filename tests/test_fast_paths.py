@@ -1207,3 +1207,28 @@ def test_link_nodes_inserted_at_once_are_those_one_by_one(seed):
         for g, w in zip(got, want):
             assert g.dtype == w.dtype and np.array_equal(g, w) and g.tobytes() == w.tobytes()
     assert len(insert_link_nodes(offsets, keys, points, squares, splits)[1]) > n
+
+
+def test_find_leaves_with_guessed_levels_are_those_without(tree_of):
+    """Octree.find_leaves looks at a guessed level first (_sides: the owner's): the same
+    leaves whatever the guesses (right, wrong, levels without leaves), on the points the
+    squares' sides ask for and on random points (some in no leaf)."""
+    from singmesh.boxes.faces import contact_squares
+
+    _, tree = tree_of
+    squares, owner, side = contact_squares(tree)
+    n, plane, u0, v0, size = squares.T
+    other = np.zeros((len(squares), 3), np.int64)
+    r = np.arange(len(squares))
+    other[r, (n + 1) % 3] = 2 * u0 + size
+    other[r, (n + 2) % 3] = 2 * v0 + size
+    other[r, n] = np.where(side == 0, 2 * plane - 1, 2 * plane + 1)
+    rng = np.random.default_rng(7)
+    top = 2 << tree.fine_level
+    odd = 2 * rng.integers(0, top // 2, (500, 3)) + 1
+    for pts, right in [(other, tree.level[owner]), (odd, np.full(len(odd), tree.level.max()))]:
+        want = tree.find_leaves(pts)
+        for guess in [right, rng.integers(0, tree.fine_level + 1, len(pts)), np.zeros(len(pts), np.int64)]:
+            assert np.array_equal(tree.find_leaves(pts, guess=guess), want)
+        assert (want >= 0).any()
+    assert (tree.find_leaves(odd) < 0).any()
