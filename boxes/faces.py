@@ -571,5 +571,7 @@ def _sides(tree: Octree, squares, owner, owner_side):
     other[r, (n + 2) % 3] = 2 * v0 + size
     # The square's centre pushed half a cell off the face, away from the owner.
     other[r, n] = np.where(owner_side == 0, 2 * plane - 1, 2 * plane + 1)
-    found = tree.find_leaves(other)
+    # The leaf across is as large as the owner or larger (the owner's face
+    # is the whole square): the owner's level first.
+    found = tree.find_leaves(other, guess=tree.level[owner])
     return np.where(owner_side == 0, found, owner), np.where(owner_side == 0, owner, found)

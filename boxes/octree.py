@@ -94,7 +94,27 @@ class Octree:
     def leaf_keys(self) -> np.ndarray:
         return node_keys(self.level, self.corner >> (self.fine_level - self.level)[:, None])
 
-    def find_leaves(self, doubled: np.ndarray) -> np.ndarray:
+    def sorted_leaf_keys(self) -> tuple[np.ndarray, np.ndarray]:
+        """``order = np.argsort(leaf_keys())`` and the keys in that order, made once per tree.
+
+        The leaf look-ups (:meth:`find_leaves`, :func:`containing_leaves`)
+        each sorted the keys again: twice per tree in a mesh.  The keys are
+        distinct, so the order is the same whichever sort made it.  Kept
+        with the ``level`` and ``corner`` arrays they were made from (a tree
+        given new ones makes them again).
+        """
+        kept = self.__dict__.get("_sorted_keys")
+        if kept is None or kept[0] is not self.level or kept[1] is not self.corner:
+            keys = self.leaf_keys()
+            order = np.argsort(keys)
+            sorted_keys = keys[order]
+            order.setflags(write=False)
+            sorted_keys.setflags(write=False)
+            kept = (self.level, self.corner, order, sorted_keys)
+            self.__dict__["_sorted_keys"] = kept
+        return kept[2], kept[3]
+
+    def find_leaves(self, doubled: np.ndarray, guess: np.ndarray | None = None) -> np.ndarray:
         """Index of the leaf containing each point, or -1.
 
         Parameters
@@ -103,12 +123,23 @@ class Octree:
             Twice the lattice coordinates of the query points; a point must
             lie strictly inside one leaf (never on a face), as face centres
             pushed half a cell off the face do.
+        guess : (K,) int64, optional
+            A level to look at first for each point (where its leaf likely
+            is); the others are looked at after, as without.  Leaves do not
+            overlap: the same leaves either way, with fewer look-ups where
+            the guesses are good.
         """
-        keys = self.leaf_keys()
-        order = np.argsort(keys)
-        sorted_keys = keys[order]
+        order, sorted_keys = self.sorted_leaf_keys()
         found = np.full(len(doubled), -1, dtype=np.int64)
         todo = np.arange(len(doubled))
+        if guess is not None and len(todo):
+            # Each point at its own guessed level: one look-up of all keys.
+            guess = np.asarray(guess, np.int64)
+            q = node_keys(guess, doubled >> (self.fine_level - guess + 1)[:, None])
+            pos = np.minimum(search_sorted(sorted_keys, q), len(sorted_keys) - 1)
+            hit = sorted_keys[pos] == q
+            found[hit] = order[pos[hit]]
+            todo = todo[~hit]
         for lvl in np.unique(self.level).tolist():
             # Only the points no leaf of another level holds yet.
             shift = self.fine_level - lvl + 1
@@ -139,9 +170,7 @@ def containing_leaves(tree: Octree, points: np.ndarray, rel: float = 1e-9) -> tu
     top = 1 << tree.fine_level
     inside = ((probes >= 0) & (probes < top)).all(axis=1)
     probes, owner = probes[inside], owner[inside]
-    keys = tree.leaf_keys()
-    order = np.argsort(keys)
-    sorted_keys = keys[order]
+    order, sorted_keys = tree.sorted_leaf_keys()
     found = np.full(len(probes), -1, np.int64)
     for lvl in np.unique(tree.level).tolist():
         cell = np.floor(probes / (1 << (tree.fine_level - lvl))).astype(np.int64)

@@ -14,6 +14,7 @@ from typing import Callable
 import numpy as np
 
 from singmesh import tolerances as tol
+from singmesh.sorting import unique_inverse
 
 from .flips import area_and_longest, flip_slivers
 from .triangulate import triangulate_polygons
@@ -210,7 +211,7 @@ def assemble(
     vertices : (V, 3), faces : (T, 3) int64, key_of_vertex : (V,) int64
     gradient : (V, 3), only with ``return_gradient``
     """
-    uniq, ids = np.unique(keys, return_inverse=True)
+    uniq, ids = unique_inverse(keys)  # np.unique's, by one plain sort of packed keys
     first = np.zeros(len(uniq), np.int64)
     first[ids[::-1]] = np.arange(len(keys))[::-1]
     vertices = points[first]

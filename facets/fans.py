@@ -347,23 +347,22 @@ def insert_link_nodes(offsets: np.ndarray, keys: np.ndarray, points: np.ndarray,
     nxt[offsets[1:] - 1] = offsets[:-1]
     split_squares = np.array(sorted({q for q, _, _ in splits}), dtype=np.int64)
     cand = np.nonzero(np.isin(squares, split_squares))[0]
-    insert_after = {}
-    for i in cand.tolist():
-        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))  # other side: b -> a
-        if link in splits:
-            insert_after[i] = splits[link][::-1]
-    if not insert_after:
+    at, ins_k, ins_p, count = [], [], [], []
+    # (The links as Python ints read in one go, not three conversions per vertex.)
+    for i, link in zip(cand.tolist(), zip(squares[cand].tolist(), keys[nxt[cand]].tolist(), keys[cand].tolist())):
+        ins = splits.get(link)  # other side: b -> a
+        if ins:
+            at.append(i)
+            count.append(len(ins))
+            for k, q in reversed(ins):
+                ins_k.append(k)
+                ins_p.append(q)
+    if not at:
         return offsets, keys, points
-    out_k, out_p, sizes = [], [], np.diff(offsets).copy()
-    last = 0
-    for i in sorted(insert_after):
-        out_k.append(keys[last:i + 1])
-        out_p.append(points[last:i + 1])
-        ins = insert_after[i]
-        out_k.append(np.array([k for k, _ in ins], np.int64))
-        out_p.append(np.array([q for _, q in ins]))
-        sizes[poly[i]] += len(ins)
-        last = i + 1
-    out_k.append(keys[last:])
-    out_p.append(points[last:])
-    return np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(out_k), np.concatenate(out_p)
+    # All insertions at once, each after its vertex (np.insert puts values
+    # for one place in the order given, before the next vertex).
+    at, count = np.array(at, np.int64), np.array(count, np.int64)
+    where = np.repeat(at + 1, count)
+    sizes = np.diff(offsets) + np.bincount(poly[at], weights=count, minlength=len(offsets) - 1).astype(np.int64)
+    return (np.concatenate([[0], np.cumsum(sizes)]), np.insert(keys, where, np.array(ins_k, np.int64)),
+            np.insert(points, where, np.array(ins_p).reshape(-1, 3), axis=0))

@@ -14,6 +14,7 @@ import numpy as np
 
 from singmesh import tolerances as tol
 from singmesh import topology
+from singmesh.sorting import in_sorted
 from singmesh.skeleton.curves import skeleton_links_many
 from singmesh.skeleton.directions import skeleton_directions
 
@@ -79,7 +80,7 @@ def facet_polygons(surf, tree, events, links, cycles, stars: dict, points: list,
         the tube's strips, made later, read it: :func:`add_strips`).
     """
     sizes = np.diff(cycles.offsets)
-    plain = ~np.isin(cycles.box, list(stars))
+    plain = ~np.isin(cycles.box, np.fromiter(stars, np.int64, len(stars)))
     plain |= stray_cycles(cycles, events, stars, expected)
     plain |= face_slivers(surf, cycles, events, tree, stars, points)
     tube = cycles.box == tube_id  # meshed as strips
@@ -323,7 +324,11 @@ def split_lattice_edges(offsets: np.ndarray, keys: np.ndarray, points: np.ndarra
     nxt = np.arange(n) + 1
     nxt[offsets[1:][sizes > 0] - 1] = offsets[:-1][sizes > 0]
     a, b = keys, keys[nxt]
-    cand = np.isin(a, lk) & np.isin(b, lk)
+    # Lattice point keys are below m^3 (events on lines, nodes and traced
+    # points above): only those ends are looked up.
+    cand = (a < m ** 3) & (b < m ** 3)
+    low = np.flatnonzero(cand)
+    cand[low] = in_sorted(a[low], lk) & in_sorted(b[low], lk)
     if not cand.any():
         return offsets, keys, points
     ca, cb = lattice(a[cand]), lattice(b[cand])

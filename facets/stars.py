@@ -164,7 +164,7 @@ def stray_cycles(cycles, events, stars: dict, expected: list) -> np.ndarray:
     and are meshed as plain facets, not fanned into the point.
     """
     stray = np.zeros(len(cycles), bool)
-    star_cycles = np.nonzero(np.isin(cycles.box, list(stars)))[0]
+    star_cycles = np.nonzero(np.isin(cycles.box, np.fromiter(stars, np.int64, len(stars))))[0]
     for box in np.unique(cycles.box[star_cycles]).tolist():
         want = expected[stars[box]]
         mine = star_cycles[cycles.box[star_cycles] == box]
@@ -291,8 +291,14 @@ def short_stars(cycles, stars: dict, expected: list) -> list[int]:
         The points whose star cube is too large for the cone over its
         boundary (it joins branches): they shrink and are meshed again.
     """
-    counts = dict(zip(*np.unique(cycles.box, return_counts=True))) if len(cycles) else {}
-    return [i for box, i in stars.items() if expected[i] is not None and counts.get(box, 0) < expected[i]]
+    if not stars:
+        return []
+    # The cycles of the star boxes alone, counted by binary search in the
+    # sorted boxes (not a dict of every box's count: ~10^4 boxes, 50 stars).
+    ids = np.fromiter(stars, np.int64, len(stars))
+    box = np.sort(np.asarray(cycles.box, np.int64)) if len(cycles) else np.zeros(0, np.int64)
+    found = np.searchsorted(box, ids, side="right") - np.searchsorted(box, ids, side="left")
+    return [i for (b, i), c in zip(stars.items(), found.tolist()) if expected[i] is not None and c < expected[i]]
 
 
 def part_branches(cycles, events, links, tree, stars: dict, points: list):

@@ -234,8 +234,12 @@ def _duplicated(faces: np.ndarray, n_vertices: int) -> np.ndarray:
 
 def edge_keys(a: np.ndarray, b: np.ndarray, n_vertices: int) -> np.ndarray:
     """One int64 per unordered vertex pair."""
-    a, b = np.minimum(a, b).astype(np.int64), np.maximum(a, b).astype(np.int64)
-    return a * max(int(n_vertices), 1) + b
+    # In place on the one fresh array np.minimum makes: each temporary of a
+    # mesh's 10^5 half-edges is a megabyte of new pages.
+    lo = np.minimum(a, b).astype(np.int64, copy=False)
+    lo *= max(int(n_vertices), 1)
+    lo += np.maximum(a, b)
+    return lo
 
 
 def _crowded_edges(faces: np.ndarray, n_vertices: int) -> np.ndarray:

@@ -128,3 +128,19 @@ def search_sorted(a: np.ndarray, v: np.ndarray, side: str = "left") -> np.ndarra
     out = np.empty(len(v), np.intp)
     out[order] = np.searchsorted(a, v[order], side=side)
     return out
+
+
+def in_sorted(v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """``np.isin(v, a)`` for a sorted 1-d ``a``: whether each entry of ``v`` occurs in ``a``.
+
+    A binary search per entry (:func:`search_sorted`) instead of
+    ``np.isin``'s sort of both arrays together: the haystack is sorted
+    already, and only the needles' order is sorted out.
+    """
+    v = np.asarray(v)
+    a = np.asarray(a)
+    if len(a) == 0 or v.size == 0:
+        return np.zeros(v.shape, bool)
+    flat = v.ravel()
+    pos = np.minimum(search_sorted(a, flat), len(a) - 1)
+    return (a[pos] == flat).reshape(v.shape)

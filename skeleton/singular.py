@@ -619,6 +619,58 @@ def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndar
     return x[~drop], bool(drop.any())
 
 
+def _representatives(x: np.ndarray, labels: np.ndarray, key: np.ndarray | None) -> tuple | None:
+    """Each cluster's representative and extent (clusters in the order of their labels), all
+    clusters at once: the members of each in index order, the sums, differences and
+    sorts the loop over clusters in :func:`_dedupe` makes, cluster by cluster.
+
+    The centre is the members' mean (:func:`_cluster_means`, as
+    ``mean(axis=0)`` of the cluster), the distances each row's norm, the
+    nearest the first least (as ``argmin``): finite points only, None
+    where a distance is not finite (the caller's loop then decides).
+    """
+    order = np.argsort(labels, kind="stable")
+    lab = labels[order]
+    xs = x[order]
+    start = np.flatnonzero(np.concatenate([[True], lab[1:] != lab[:-1]]))
+    count = np.diff(np.concatenate([start, [len(xs)]]))
+    extent = (np.maximum.reduceat(xs, start, axis=0) - np.minimum.reduceat(xs, start, axis=0)).max(axis=1)
+    if key is not None:
+        best = np.lexsort((xs[:, 2], xs[:, 1], xs[:, 0], key[order], lab))
+    else:
+        centre = _cluster_means(xs, start, count)
+        d = np.linalg.norm(xs - np.repeat(centre, count, axis=0), axis=1)
+        if not np.isfinite(d).all():
+            return None  # (argmin takes the first NaN; sorts put NaN last)
+        best = np.lexsort((d, lab))
+    # The first of each cluster in the sorted order (clusters in label order).
+    return xs[best[start]], extent
+
+
+def _cluster_means(xs: np.ndarray, start: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """``xs[start[c]:start[c] + count[c]].mean(axis=0)`` of each cluster c, to the bit.
+
+    numpy sums along the first axis row after row (``np.add.reduceat``
+    sums otherwise): the clusters' sums add their r-th members together,
+    r = 1, 2, ..., for all clusters at once; a large cluster (few) takes
+    its own ``mean``.
+    """
+    sums = xs[start].copy()
+    small = count <= _FEW_MEMBERS
+    for r in range(1, int(count[small].max(initial=1))):
+        more = np.flatnonzero(small & (count > r))
+        sums[more] += xs[start[more] + r]
+    centre = sums / count[:, None]
+    for c in np.flatnonzero(~small).tolist():
+        centre[c] = xs[start[c]:start[c] + count[c]].mean(axis=0)
+    return centre
+
+
+#: Clusters of at most this many points have their means summed together
+#: (a step per member rank); larger ones one by one.
+_FEW_MEMBERS = 32
+
+
 def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: bool = False):
     """One representative per cluster of points closer than ``radius``.
 
@@ -637,6 +689,11 @@ def _dedupe(x: np.ndarray, radius: float, key: np.ndarray | None = None, spans: 
     # that is symmetric with a zero diagonal ((0, a, a), (a, 0, a), (a, a, 0))
     # it warns that they look like a distance matrix (same clusters either way).
     labels = fcluster(linkage(pdist(x), method="single"), t=radius, criterion="distance")
+    batch = _representatives(x, labels, key) if np.isfinite(x).all() else None
+    if batch is not None:
+        reps, extent = batch
+        order = np.lexsort(reps.T[::-1])
+        return (reps[order], extent[order]) if spans else reps[order]
     reps, extent = [], []
     for lab in np.unique(labels):
         sel = labels == lab

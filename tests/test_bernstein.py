@@ -135,7 +135,43 @@ def test_mixed_corners_and_empty_boxes_against_all_coefficients():
     z = rng.normal(size=(300, 5, 5, 5)) + 2.0
     z[:, ::4, ::4, ::4] = rng.choice([0.0, -0.0, 1.0, -1e-17], size=(300, 2, 2, 2))
     stacks.append(z)
+    # NaN at corners (both signs elsewhere still count), and views that are
+    # not C-contiguous (the corners are then gathered from the view itself).
+    w = rng.normal(size=(200, 5, 4, 3))
+    w[:, 0, 0, 0] = np.where(rng.random(200) < 0.3, np.nan, w[:, 0, 0, 0])
+    stacks.append(w)
     for t in stacks:
         assert np.array_equal(mixed_corners(t), corners(t))
         assert np.array_equal(empty_boxes(t), reference(t))
+    for view in [np.swapaxes(np.swapaxes(stacks[0], 1, 3).copy(), 1, 3), stacks[2][::2], w[:, ::-1]]:
+        assert not view.flags.c_contiguous
+        assert np.array_equal(mixed_corners(view), corners(view))
     assert mixed_corners(stacks[0]).any() and empty_boxes(stacks[0]).any() and not empty_boxes(stacks[0]).all()
+
+
+def test_may_vanish_ands_each_boxs_tests():
+    """may_vanish tests the derivatives before F, each on the boxes still kept: the
+    answer is every box's four tests and-ed, checked here box by box (coefficients of
+    F and of its differences along each axis within the slack of their largest, or
+    within the dust), on random stacks, with zeros, a degree 0 axis and none."""
+    from singmesh import tolerances as tol
+    from singmesh.boxes.polynomial_bounds import may_vanish
+
+    def holds_zero(c, dust):
+        if c.size == 0:
+            return True
+        slack = max(tol.CANDIDATE_SLACK * max(c.max(), -c.min()), dust)
+        return c.min() <= slack and c.max() >= -slack
+
+    rng = np.random.default_rng(12)
+    t = rng.normal(size=(600, 4, 3, 5)) * rng.choice([0.05, 1.0], size=(600, 1, 1, 1))
+    t += rng.choice([0.0, 0.2, -0.2], size=(600, 1, 1, 1))
+    t[:50] = 0.0
+    t[50:80, :, 0] = 1e-18
+    for stack, axes, dust in [(t, (0, 1, 2), 0.0), (t, (0, 2), 1e-3), (t[:, :, :1], (0, 1, 2), 0.0),
+                              (t[:0], (0, 1, 2), 0.0)]:
+        got = may_vanish(stack, axes, dust)
+        want = [holds_zero(b, dust) and all(holds_zero(np.diff(b, axis=a), dust) for a in axes if b.shape[a] > 1)
+                for b in stack]
+        assert np.array_equal(got, np.array(want, bool).reshape(-1))
+    assert may_vanish(t, (0, 1, 2), 0.0).any() and not may_vanish(t, (0, 1, 2), 0.0).all()

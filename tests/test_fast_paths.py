@@ -1026,3 +1026,209 @@ def test_events_on_segments_in_chunks_are_those_in_one_go(tree_of, monkeypatch):
         monkeypatch.setattr(edges_mod, "_SEGMENT_CHUNK", chunk)
         got = events.on_segments(e_axis, e_f1, e_f2, e_start, e_end)
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def _dedupe_loop(x, radius, key=None, spans=False):
+    """singular._dedupe as it was: one cluster at a time (the reference)."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
+
+    labels = fcluster(linkage(pdist(x), method="single"), t=radius, criterion="distance")
+    reps, extent = [], []
+    for lab in np.unique(labels):
+        sel = labels == lab
+        members = x[sel]
+        extent.append(np.ptp(members, axis=0).max())
+        if key is not None:
+            reps.append(members[np.lexsort((members[:, 2], members[:, 1], members[:, 0], key[sel]))[0]])
+            continue
+        c = members.mean(axis=0)
+        reps.append(members[np.argmin(np.linalg.norm(members - c, axis=1))])
+    reps = np.array(reps)
+    order = np.lexsort(reps.T[::-1])
+    return (reps[order], np.array(extent)[order]) if spans else reps[order]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dedupe_of_all_clusters_at_once_is_the_loop(seed):
+    """singular._dedupe picks every cluster's representative in one batch: the points and
+    extents the loop over clusters gives, bit for bit: Newton end points about nodes
+    (clusters of 1 to 300 members 1e-13 apart, float coordinates), ties in the key and in
+    the distance to the centre, one cluster, all apart, a point given twice."""
+    from singmesh.skeleton.singular import _dedupe
+
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(size=(int(rng.integers(1, 6 if seed == 0 else 60)), 3)) * 10.0 ** rng.integers(-2, 3)
+    sizes = rng.integers(1, 300 if seed == 0 else 12, len(centres))
+    x = np.concatenate([c + rng.normal(size=(k, 3)) * 1e-13 * (1 + np.abs(c)) for c, k in zip(centres, sizes)])
+    x = x[rng.permutation(len(x))]
+    x[-1] = x[0]  # a point twice
+    sym = np.concatenate([x[:4], -x[:4]])  # a cluster symmetric about its centre: equal distances
+    key = np.round(rng.random(len(x)), 1)  # ties in the key
+    for pts, radius in [(x, 1e-7), (x, 1e-16), (x, 1e6), (sym, 1e6)]:
+        k = key[:len(pts)]
+        for kw in [{}, {"key": k}, {"spans": True}, {"key": k, "spans": True}]:
+            got, want = _dedupe(pts, radius, **kw), _dedupe_loop(pts, radius, **kw)
+            for g, w in zip(got if kw.get("spans") else [got], want if kw.get("spans") else [want]):
+                assert g.shape == w.shape and np.array_equal(g, w) and g.tobytes() == w.tobytes()
+
+
+def test_short_stars_by_sorted_boxes_is_the_count_table():
+    """stars.short_stars counts the star boxes' cycles by binary search in the sorted
+    boxes: the points the table of every box's count gives, in the stars' order (boxes
+    with no cycle, unknown branch counts, stars given in any order, no cycles at all)."""
+    from singmesh.facets.stars import short_stars
+
+    rng = np.random.default_rng(9)
+    for n_cycles in [0, 1, 40, 12000]:
+        box = rng.integers(0, 300, n_cycles)
+        ids = rng.permutation(np.arange(250, 320))[:50].tolist()
+        stars = {b: i for i, b in enumerate(ids)}
+        expected = [None if rng.random() < 0.2 else int(rng.integers(0, 4)) for _ in ids]
+        cycles = type("Cycles", (), {"box": box, "__len__": lambda self: len(self.box)})()
+        counts = dict(zip(*np.unique(box, return_counts=True))) if len(box) else {}
+        want = [i for b, i in stars.items() if expected[i] is not None and counts.get(b, 0) < expected[i]]
+        assert short_stars(cycles, stars, expected) == want
+    assert short_stars(cycles, {}, []) == []
+
+
+def test_sorted_leaf_keys_are_made_once_per_tree(tree_of):
+    """Octree.sorted_leaf_keys: the argsort of the leaf keys and the sorted keys, made once
+    per tree (the same arrays the next time, read-only) and again for a tree with other
+    leaves; the leaf look-ups give what they gave with the keys sorted at each call."""
+    from dataclasses import replace
+
+    from singmesh.boxes.octree import containing_leaves
+
+    _, tree = tree_of
+    keys = tree.leaf_keys()
+    order, sk = tree.sorted_leaf_keys()
+    assert np.array_equal(sk, np.sort(keys)) and np.array_equal(keys[order], sk)
+    again = tree.sorted_leaf_keys()
+    assert again[0] is order and again[1] is sk and not order.flags.writeable
+    other = replace(tree, level=tree.level[::-1].copy(), corner=tree.corner[::-1].copy())
+    o2, s2 = other.sorted_leaf_keys()
+    assert np.array_equal(s2, sk) and np.array_equal(other.leaf_keys()[o2], s2) and not np.array_equal(o2, order)
+    rng = np.random.default_rng(2)
+    pts = tree.box[:, 0] + rng.random((200, 3)) * (tree.box[:, 1] - tree.box[:, 0])
+    first = containing_leaves(tree, pts)
+    second = containing_leaves(tree, pts)
+    assert all(np.array_equal(a, b) for a, b in zip(first, second))
+    doubled = 2 * np.floor((pts - tree.box[:, 0]) / tree.cell).astype(np.int64) + 1
+    found = tree.find_leaves(doubled)
+    lo, hi = 2 * tree.corner, 2 * (tree.corner + tree.size[:, None])
+    inside = ((lo[None] < doubled[:, None]) & (doubled[:, None] < hi[None])).all(axis=2)  # (points, leaves)
+    want = np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+    assert np.array_equal(found, want) and (found >= 0).any() and (found < 0).any()
+
+
+def test_pieces_from_two_sides_of_each_triangle_are_those_of_three():
+    """lattice_specks labels the mesh's pieces from two sides of each triangle: the count
+    and the labels of the pieces from all three sides, on a float-rotated mesh of two
+    spheres (two pieces) plus random triangles over few vertices (many small pieces)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = singmesh.mesh("((x-0.5)^2+y^2+z^2-0.1)*((x+0.5)^2+y^2+z^2-0.1)*1.000000000000001", ((-1, 1),) * 3,
+                      coarse=16, fine=32)
+    rng = np.random.default_rng(6)
+    for faces, n in [(np.asarray(m.faces), len(m.vertices)), (rng.integers(0, 500, (300, 3)), 500)]:
+        a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
+        three = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+        two = (np.concatenate([faces[:, 0], faces[:, 1]]), np.concatenate([faces[:, 1], faces[:, 2]]))
+        got = connected_components(coo_matrix((np.ones(len(two[0]), np.int8), two), shape=(n, n)), directed=False)
+        assert got[0] == three[0] and np.array_equal(got[1], three[1])
+    assert three[0] > 50
+
+
+def _insert_link_nodes_loop(offsets, keys, points, squares, splits):
+    """fans.insert_link_nodes as it was: one insertion at a time (the reference)."""
+    if not splits:
+        return offsets, keys, points
+    n = len(keys)
+    poly = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    nxt = np.arange(n) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    split_squares = np.array(sorted({q for q, _, _ in splits}), dtype=np.int64)
+    cand = np.nonzero(np.isin(squares, split_squares))[0]
+    insert_after = {}
+    for i in cand.tolist():
+        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))
+        if link in splits:
+            insert_after[i] = splits[link][::-1]
+    if not insert_after:
+        return offsets, keys, points
+    out_k, out_p, sizes = [], [], np.diff(offsets).copy()
+    last = 0
+    for i in sorted(insert_after):
+        out_k.append(keys[last:i + 1])
+        out_p.append(points[last:i + 1])
+        ins = insert_after[i]
+        out_k.append(np.array([k for k, _ in ins], np.int64))
+        out_p.append(np.array([q for _, q in ins]))
+        sizes[poly[i]] += len(ins)
+        last = i + 1
+    out_k.append(keys[last:])
+    out_p.append(points[last:])
+    return np.concatenate([[0], np.cumsum(sizes)]), np.concatenate(out_k), np.concatenate(out_p)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_link_nodes_inserted_at_once_are_those_one_by_one(seed):
+    """fans.insert_link_nodes puts every subdivided link's nodes into the polygons across
+    in one np.insert: the polygons of the insertion one by one, bit for bit (links with one
+    to three nodes, at a polygon's last vertex (its closing link), links on other squares
+    or the other way round (no insertion), splits matching nothing, none at all)."""
+    from singmesh.facets.fans import insert_link_nodes
+
+    rng = np.random.default_rng(seed)
+    sizes = rng.integers(3, 9, 400)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    n = int(offsets[-1])
+    keys = rng.integers(-5, 4000, n)
+    points = rng.normal(size=(n, 3))
+    squares = np.where(rng.random(n) < 0.4, rng.integers(0, 50, n), -1)
+    nxt = np.arange(n) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    splits, key = {}, 10 ** 6
+    for i in rng.choice(np.flatnonzero(squares >= 0), 120, replace=False).tolist():
+        k = int(rng.integers(1, 4))
+        link = (int(squares[i]), int(keys[nxt[i]]), int(keys[i]))
+        if rng.random() < 0.2:
+            link = (link[0] + 1, link[1], link[2])  # another square: no insertion
+        elif rng.random() < 0.2:
+            link = (link[0], link[2], link[1])  # the same way round: no insertion
+        splits[link] = [(key + j, rng.normal(size=3)) for j in range(k)]
+        key += k
+    splits[(7, -99, -98)] = [(key, np.zeros(3))]
+    for sp in [splits, {}, {(7, -99, -98): [(1, np.zeros(3))]}]:
+        got = insert_link_nodes(offsets, keys, points, squares, sp)
+        want = _insert_link_nodes_loop(offsets, keys, points, squares, sp)
+        for g, w in zip(got, want):
+            assert g.dtype == w.dtype and np.array_equal(g, w) and g.tobytes() == w.tobytes()
+    assert len(insert_link_nodes(offsets, keys, points, squares, splits)[1]) > n
+
+
+def test_find_leaves_with_guessed_levels_are_those_without(tree_of):
+    """Octree.find_leaves looks at a guessed level first (_sides: the owner's): the same
+    leaves whatever the guesses (right, wrong, levels without leaves), on the points the
+    squares' sides ask for and on random points (some in no leaf)."""
+    from singmesh.boxes.faces import contact_squares
+
+    _, tree = tree_of
+    squares, owner, side = contact_squares(tree)
+    n, plane, u0, v0, size = squares.T
+    other = np.zeros((len(squares), 3), np.int64)
+    r = np.arange(len(squares))
+    other[r, (n + 1) % 3] = 2 * u0 + size
+    other[r, (n + 2) % 3] = 2 * v0 + size
+    other[r, n] = np.where(side == 0, 2 * plane - 1, 2 * plane + 1)
+    rng = np.random.default_rng(7)
+    top = 2 << tree.fine_level
+    odd = 2 * rng.integers(0, top // 2, (500, 3)) + 1
+    for pts, right in [(other, tree.level[owner]), (odd, np.full(len(odd), tree.level.max()))]:
+        want = tree.find_leaves(pts)
+        for guess in [right, rng.integers(0, tree.fine_level + 1, len(pts)), np.zeros(len(pts), np.int64)]:
+            assert np.array_equal(tree.find_leaves(pts, guess=guess), want)
+        assert (want >= 0).any()
+    assert (tree.find_leaves(odd) < 0).any()

@@ -66,3 +66,22 @@ def test_search_sorted_is_numpys(side):
     x = np.sort(_floats(rng, 2000))
     q = _floats(rng, 3000)
     assert np.array_equal(sorting.search_sorted(x, q, side), np.searchsorted(x, q, side=side))
+
+
+def test_in_sorted_is_numpys_isin():
+    """sorting.in_sorted (a binary search per needle in a sorted haystack) is np.isin entry
+    for entry: lattice keys with repeats, misses beyond both ends, negative keys (singular
+    points'), an empty haystack or no needles, 2-d needles, floats with -0.0."""
+    rng = np.random.default_rng(8)
+    for n, k in [(1, 5), (50, 300), (2000, 60000), (40000, 500)]:
+        hay = np.unique(rng.integers(0, 1 << 30, n))
+        needles = np.concatenate([rng.integers(-50, 1 << 31, k // 2), rng.choice(hay, k - k // 2)])
+        assert np.array_equal(sorting.in_sorted(needles, hay), np.isin(needles, hay))
+        grid = needles[: 2 * (k // 4)].reshape(2, -1)
+        assert np.array_equal(sorting.in_sorted(grid, hay), np.isin(grid, hay))
+    assert not sorting.in_sorted(np.arange(5), np.zeros(0, np.int64)).any()
+    assert sorting.in_sorted(np.zeros(0, np.int64), np.arange(5)).shape == (0,)
+    x = np.unique(rng.normal(size=50))
+    q = np.concatenate([x[::3], rng.normal(size=20), [0.0, -0.0]])
+    x = np.sort(np.concatenate([x, [0.0]]))
+    assert np.array_equal(sorting.in_sorted(q, x), np.isin(q, x))
