@@ -430,12 +430,6 @@ CURVE_KERNEL_SCALES = CURVE_TRACE_SCALES + (0.03125, 0.015625)
 #: more than ~25 degrees off the curve's tangent (|cos| below this), as at
 #: the tip of such a loop, where the samples lie on both arms.
 CURVE_START_ALONG = 0.9
-#: Traces closer than a step cross there only where the Hessian's second
-#: singular value at the crossing found is below this fraction of the
-#: Hessian's size nearby: ~1e-16 at a cone's apex on a plane (fuzz
-#: s4-210), 0.06 and more where two branches of the curve pass 1-4 cells
-#: apart (s3-350, s3-474; at the tips of their loops 0.002-0.05).
-CURVE_CROSS_RANK = 1e-4
 #: A trace step stands only where Newton from its chord's midpoint lands
 #: within this fraction of the chord (an arc turning up to ~45 degrees
 #: within the step; one turning more is taken in shorter steps): a step

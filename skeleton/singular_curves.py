@@ -725,7 +725,7 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
                 # its vertex ahead or behind along the curve.  Not one
                 # beside it: past a cone's apex on the curve, a branch
                 # near the other branches there was joined to one of them
-                # 0.8 cells across (fuzz s4-210: the branch beyond never
+                # 1.2 cells across (fuzz s4-210: the branch beyond never
                 # traced).
                 pts.append(earlier_points[i])
                 return pts[1:], "joined"
@@ -1059,23 +1059,6 @@ def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.nda
     return x
 
 
-def _locus_meets_itself(surface: Surface, x: np.ndarray, near: np.ndarray) -> bool:
-    """Whether the singular locus is singular at x: curves really cross there.
-
-    Where curves of singular points cross (a triple point, a cone's apex
-    on another sheet, two factors tangent) the Hessian has rank one or
-    none: its second singular value vanishes, to the rounding of x's
-    placement.  Two branches of a double curve passing within a step
-    (two sheets nearly tangent: fuzz s3-350, s3-474) keep it at 5% or
-    more of the Hessian's size there (the largest first singular value at
-    x and at the traces' vertices ``near``), and were merged into a
-    "crossing" that joined them.  Below ``CURVE_CROSS_RANK`` of it they
-    are taken to cross.
-    """
-    sv = np.linalg.svd(surface.hessian(np.vstack([x[None], near])), compute_uv=False)
-    return bool(sv[0, 1] <= tol.CURVE_CROSS_RANK * sv[:, 0].max())
-
-
 def _graph(polylines: list, surface: Surface, h: float, box: np.ndarray | None = None):
     """One vertex array and edge list for all polylines, crossings merged into shared vertices."""
     pts, edges, line_of = [], [], []
@@ -1127,10 +1110,6 @@ def _graph(polylines: list, surface: Surface, h: float, box: np.ndarray | None =
             flat = _flat_point(surface, x, 2.0 * h)
             if flat is not None:
                 x = flat
-            if len(same) < 2 and not _locus_meets_itself(surface, x, P[comp]):
-                # Two stretches of the curve passing closer than a step
-                # without meeting: each keeps its own vertices.
-                continue
             if box is not None and not _inside(box, x):
                 # Curves meeting beyond the box (a plane crossing a cone's
                 # double line 0.04 past the face, fuzz s1-186): their ends
