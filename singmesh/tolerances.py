@@ -430,6 +430,25 @@ CURVE_TURN_RANK = 0.2
 #: through a cone's apex).  A turn of 60 degrees within one step is taken
 #: with a shorter one.
 CURVE_TRACE_ALONG = 0.5
+#: Where the step along the last chord loses the curve, a step along the
+#: Hessian's kernel (the curve's tangent) is tried where that kernel is
+#: one direction: the second singular value at least this fraction of the
+#: first (two sheets crossing at 5 degrees give 0.002, fuzz s3-474's
+#: loop tip; along a cuspidal edge it is at rounding level).
+CURVE_KERNEL_RANK = 1e-3
+#: ... with steps down to a 64th (a 16th of a cell): the tip of such a
+#: loop can be a cell across or less (fuzz s3-2: followed at 1/64 only).
+CURVE_KERNEL_SCALES = CURVE_TRACE_SCALES + (0.03125, 0.015625)
+#: A trace sets out along the samples' principal direction unless that is
+#: more than ~25 degrees off the curve's tangent (|cos| below this), as at
+#: the tip of such a loop, where the samples lie on both arms.
+CURVE_START_ALONG = 0.9
+#: A trace step stands only where Newton from its chord's midpoint lands
+#: within this fraction of the chord (an arc turning up to ~45 degrees
+#: within the step; one turning more is taken in shorter steps): a step
+#: of 4 cells from one arm of a loop to the other 2 cells away lands a
+#: quarter of the chord off.
+CURVE_STEP_SAGITTA = 0.1
 
 #: A trace closes back at its start only after this many steps' length
 #: (four full steps, as before the shorter steps of CURVE_TRACE_SCALES,

@@ -619,6 +619,67 @@ def _along(surface: Surface, y: np.ndarray, t: np.ndarray) -> bool:
     return bool(abs(np.dot(vt[2], t)) >= tol.CURVE_TRACE_ALONG)
 
 
+def _continues(surface: Surface, x: np.ndarray, y: np.ndarray) -> bool:
+    """Whether the curve runs from x to y: the chord's midpoint is within ``CURVE_STEP_SAGITTA`` of it.
+
+    Two branches of a double curve passing a cell or two apart (two sheets
+    nearly tangent: fuzz s3-474, at 27 degrees to each other) are both
+    along the step, and a step from one landed on the other: the trace
+    went on along it, the curve was traced twice and its other branch
+    never.  Newton from the midpoint across the chord lands on the curve
+    between x and y by its sagitta (0.1 of the chord for a turn of 45
+    degrees); between two branches it goes half the gap to one of them.
+    """
+    chord = y - x
+    length = float(np.linalg.norm(chord))
+    m = 0.5 * (x + y)
+    z, ok = _correct(surface, m[None], chord[None], length)
+    return bool(ok[0] and np.linalg.norm(z[0] - m) <= tol.CURVE_STEP_SAGITTA * length)
+
+
+def _kernel_step(surface: Surface, x: np.ndarray, t: np.ndarray, h: float) -> np.ndarray | None:
+    """A trace step from x predicted along the curve's own tangent there, or None.
+
+    Where the step along the last chord ``t`` loses the curve, the curve
+    has turned within a step: two sheets crossing at a few degrees (fuzz
+    s3-474, s3-2, s3-534: the Hessian's second singular value 0.2-2% of
+    its first) bend their double curve round in a cell or two, and the
+    chord then points off it (a loop's tip never passed, its other arm
+    never traced).  Where the Hessian has rank two (two sheets, not a
+    cuspidal edge) its kernel is the tangent at x itself; the steps of
+    ``CURVE_KERNEL_SCALES`` along it (the side of ``t``) are tried, each
+    landing where the curve runs along it, as every step must.
+    """
+    _, sv, vt = np.linalg.svd(surface.hessian(x[None])[0])
+    if not sv[1] >= tol.CURVE_KERNEL_RANK * sv[0]:
+        return None
+    k = vt[2] if np.dot(vt[2], t) >= 0 else -vt[2]
+    for scale in tol.CURVE_KERNEL_SCALES:
+        q = x + scale * h * k
+        z, ok = _correct_vertex(surface, q[None], k[None], scale * h)
+        if ok[0] and np.dot(z[0] - x, k) > 0.3 * scale * h and _along(surface, z[0], k) \
+                and _continues(surface, x, z[0]):
+            return z[0]
+    return None
+
+
+def _start_direction(surface: Surface, x0: np.ndarray, t0: np.ndarray) -> np.ndarray:
+    """The direction a trace from x0 sets out along: the samples' chord ``t0``, or the tangent where that is off it.
+
+    Near the tip of a loop of the double curve (two sheets crossing at a
+    few degrees) the samples lie on both arms and their principal
+    direction is the arms', not the curve's at x0: the first step along
+    it landed on the other arm (fuzz s3-2), which was then traced twice
+    and the tip never.  Where the Hessian's kernel is one direction
+    (``CURVE_KERNEL_RANK``) and ``t0`` is more than ``CURVE_START_ALONG``
+    off it, the kernel (the tangent at x0) is taken, on ``t0``'s side.
+    """
+    _, sv, vt = np.linalg.svd(surface.hessian(x0[None])[0])
+    if not sv[1] >= tol.CURVE_KERNEL_RANK * sv[0] or abs(np.dot(vt[2], t0)) >= tol.CURVE_START_ALONG:
+        return t0
+    return vt[2] if np.dot(vt[2], t0) >= 0 else -vt[2]
+
+
 def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.ndarray, h: float, max_steps: int,
                    earlier: cKDTree | None = None, earlier_points: np.ndarray | None = None,
                    earlier_tangents: np.ndarray | None = None):
@@ -639,9 +700,12 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
                 break
             q = x + scale * h * t
             z, ok = _correct_vertex(surface, q[None], t[None], scale * h)
-            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h and _along(surface, z[0], t):
+            if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h and _along(surface, z[0], t) \
+                    and _continues(surface, x, z[0]):
                 y = z[0]
                 break
+        if y is None:
+            y = _kernel_step(surface, x, t, h)
         if y is None:
             return pts[1:], "lost"
         if not _inside(box, y) or _exit_beyond(box, x, y) <= tol.CURVE_MERGE * h / max(1, tol.CURVE_TRACE_STEP):
@@ -654,9 +718,15 @@ def _trace_one_way(surface: Surface, box: np.ndarray, x0: np.ndarray, t0: np.nda
             return pts[1:], "closed"
         if earlier is not None and n > 0:
             d, i = earlier.query(y)
-            if d < 0.5 * h and abs(np.dot(earlier_tangents[i], _unit(y - x))) > 0.9:
+            if d < 0.5 * h and abs(np.dot(earlier_tangents[i], _unit(y - x))) > 0.9 \
+                    and (d <= 1e-9 * h or abs(np.dot(_unit(earlier_points[i] - y), _unit(y - x))) > 0.9):
                 # Running along an earlier trace (not across it, as at a
-                # crossing): the same curve, traced from its other end.
+                # crossing): the same curve, traced from its other end,
+                # its vertex ahead or behind along the curve.  Not one
+                # beside it: past a cone's apex on the curve, a branch
+                # near the other branches there was joined to one of them
+                # 1.2 cells across (fuzz s4-210: the branch beyond never
+                # traced).
                 pts.append(earlier_points[i])
                 return pts[1:], "joined"
         t = _unit(y - x)
@@ -706,6 +776,7 @@ def trace_curves(surface: Surface, box: np.ndarray, samples: np.ndarray, h: floa
             # other samples start it.
             continue
         x0 = z[0]
+        t0 = _start_direction(surface, x0, t0)
         fwd, how_f = _trace_one_way(surface, box, x0, t0, h, max_steps, earlier, earlier_points, earlier_tangents)
         back, how_b = ([], "closed") if how_f == "closed" else \
             _trace_one_way(surface, box, x0, -t0, h, max_steps, earlier, earlier_points, earlier_tangents)
@@ -988,7 +1059,7 @@ def _crossing_point(surface: Surface, p: np.ndarray, i: int, h: float) -> np.nda
     return x
 
 
-def _graph(polylines: list, surface: Surface, h: float):
+def _graph(polylines: list, surface: Surface, h: float, box: np.ndarray | None = None):
     """One vertex array and edge list for all polylines, crossings merged into shared vertices."""
     pts, edges, line_of = [], [], []
     base = 0
@@ -1039,6 +1110,11 @@ def _graph(polylines: list, surface: Surface, h: float):
             flat = _flat_point(surface, x, 2.0 * h)
             if flat is not None:
                 x = flat
+            if box is not None and not _inside(box, x):
+                # Curves meeting beyond the box (a plane crossing a cone's
+                # double line 0.04 past the face, fuzz s1-186): their ends
+                # on the box are each their own.
+                continue
             # All members within a step of the crossing (on every trace)
             # become that one vertex.
             near = np.nonzero(np.linalg.norm(P - x, axis=1) <= 0.75 * h)[0]
@@ -1286,7 +1362,7 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     if not lines:
         return CurveSet()
     lines = densify(surface, lines, k)
-    P, E, cross = _graph(lines, surface, step)
+    P, E, cross = _graph(lines, surface, step, box)
     T = _tangents(P, E)
     names, sheets, arcs = transversal_types(surface, P, T, tol.CURVE_CIRCLE_RADIUS * step)
     out = _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
