@@ -112,11 +112,11 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
     far = face_rail_events(events.point, curves.points, box, cell,
                            radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL)
-    if len(ends) > 1 and not far.all():
+    if len(ends) and not far.all():
         # A half-sheet whose trace on a face runs from one curve end to
         # another inside the tube (a curve that dips a few cells into the
-        # box and comes back out through the same face): that trace is
-        # its rail.
+        # box and comes back out through the same face), or passes a
+        # curve end without leaving it: that trace is its rail.
         every = rails(grouped, links, tube_id, np.ones(len(events.point), bool))
         far = face_chords(every, events.point, far, curves.points[ends], box, cell)
     # Along creases the rails' snaps never step back (see strip_triangles).
@@ -206,24 +206,39 @@ def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarr
     largest cell, a curve 6 x-cells from a face along 20 y-cells was all
     within reach of its ends).
     """
-    on_box = faces_of(curve_points, box).any(axis=1)
+    end_faces = faces_of(curve_points, box)
     far = np.ones(len(points), bool)
-    if not on_box.any():
+    if not end_faces.any():
         return far
     axes = _axis_cells(box, cell)
-    d_end = cKDTree(curve_points[on_box] / axes).query(points / axes, distance_upper_bound=keep_off)[0]
-    return d_end > keep_off
+    ev_faces = faces_of(points, box)
+    for f in range(6):
+        # Only the ends on the event's own face: a trace on another face
+        # (a curve ending on z = 2 six cells from y = -1.5, running along
+        # y = -1.5: fuzz s3-410) does not leave that end, it reaches the
+        # box edge and goes on along the end's face.
+        ends, at = end_faces[:, f], ev_faces[:, f]
+        if not ends.any() or not at.any():
+            continue
+        d_end = cKDTree(curve_points[ends] / axes).query(points[at] / axes, distance_upper_bound=keep_off)[0]
+        far[np.nonzero(at)[0][d_end <= keep_off]] = False
+    return far
 
 
 def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.ndarray, box: np.ndarray,
                 cell: float) -> np.ndarray:
-    """``far`` with the events added of face traces from one curve end on the box to another.
+    """``far`` with the events added of face traces that are whole half-sheets' rails near the curves' ends.
 
-    ``rail_list`` are the tube's rails with every face link on them; a run
+    ``rail_list`` are the tube's rails with every face link on them.  A run
     of their events on the box's faces, starting and ending within
     ``CURVE_FACE_GAP`` cells of two different curve ends, is the whole
     trace of a half-sheet that lies inside the tube between the curve and
-    the face: it is a rail.
+    the face: it is a rail.  So is a stretch of such a run that is not
+    flagged (near a curve end), has events of the rail before and after
+    it, and comes no nearer than ``CURVE_FACE_GAP`` cells to any curve
+    end: a trace that passes the end without leaving it (a sheet's trace
+    on the face turning back beside the end, fuzz s3-410: its rail broke
+    there, and both pieces were fanned to the end).
     """
     axes = _axis_cells(box, cell)
     tree = cKDTree(end_points / axes)
@@ -238,7 +253,15 @@ def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.n
             if b - a < 2:
                 continue
             d, k = tree.query(points[ev[[a, b - 1]]] / axes)
-            if k[0] != k[1] and d.max() <= tol.CURVE_FACE_GAP:
+            if len(end_points) > 1 and k[0] != k[1] and d.max() <= tol.CURVE_FACE_GAP:
+                out[ev[a:b]] = True
+        # Stretches of face events not flagged, inside the rail, away from every end.
+        gap = run & ~far[ev]
+        edges = np.diff(np.concatenate([[0], gap.astype(np.int8), [0]]))
+        for a, b in zip(np.nonzero(edges == 1)[0].tolist(), np.nonzero(edges == -1)[0].tolist()):
+            if a == 0 or b == len(ev):
+                continue
+            if tree.query(points[ev[a:b]] / axes)[0].min() > tol.CURVE_FACE_GAP:
                 out[ev[a:b]] = True
     return out
 
