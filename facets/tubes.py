@@ -206,23 +206,13 @@ def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarr
     largest cell, a curve 6 x-cells from a face along 20 y-cells was all
     within reach of its ends).
     """
-    end_faces = faces_of(curve_points, box)
+    on_box = faces_of(curve_points, box).any(axis=1)
     far = np.ones(len(points), bool)
-    if not end_faces.any():
+    if not on_box.any():
         return far
     axes = _axis_cells(box, cell)
-    ev_faces = faces_of(points, box)
-    for f in range(6):
-        # Only the ends on the event's own face: a trace on another face
-        # (a curve ending on z = 2 six cells from y = -1.5, running along
-        # y = -1.5: fuzz s3-410) does not leave that end, it reaches the
-        # box edge and goes on along the end's face.
-        ends, at = end_faces[:, f], ev_faces[:, f]
-        if not ends.any() or not at.any():
-            continue
-        d_end = cKDTree(curve_points[ends] / axes).query(points[at] / axes, distance_upper_bound=keep_off)[0]
-        far[np.nonzero(at)[0][d_end <= keep_off]] = False
-    return far
+    d_end = cKDTree(curve_points[on_box] / axes).query(points / axes, distance_upper_bound=keep_off)[0]
+    return d_end > keep_off
 
 
 def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.ndarray, box: np.ndarray,
@@ -668,13 +658,16 @@ def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: i
     """The curve's walk from a rail end's snap ``s`` to the curve end on the box it is fanned to, or None.
 
     The nearest curve end within ``reach`` of the rail end ``p``, unless
-    more than half of its walk goes over curve edges the rail's own strip
-    reaches (``zipped``: pairs both ways): then, of the ends at most twice
-    as far, the one whose walk goes over fewest.  A rail beside a curve
-    that runs a few cells from the box over all its length (its trace on
-    a face, an arc from a face back to it) has both ends near both curve
-    ends: each of its ends is fanned to the curve end it points to, not
-    back over the rail's own strip.
+    its walk goes over curve edges the rail's own strip reaches
+    (``zipped``: pairs both ways): then, of the ends at most twice as far,
+    the one whose walk goes over fewest.  A rail beside a curve that runs
+    a few cells from the box over all its length (its trace on a face, an
+    arc from a face back to it) has both ends near both curve ends: each
+    of its ends is fanned to the curve end it points to, not back over the
+    rail's own strip, not even partly: a rail beside a curve running from
+    one face to the next within 4 cells of the first (fuzz s3-818) ends
+    nearer the far curve end, whose walk went back over some of the edges
+    its strip zipped (edges of three and five triangles).
     """
     found = end_tree.query(p, k=min(4, len(box_ends)), distance_upper_bound=reach)
     dist, which = np.atleast_1d(found[0]), np.atleast_1d(found[1])
@@ -686,7 +679,7 @@ def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: i
     if not walks:
         return None
     over, d0, w = walks[0]
-    if 2 * over <= len(w) - 1:
+    if over == 0:
         return w
     return min((c for c in walks if c[1] <= 2.0 * d0), key=lambda c: (c[0], c[1]))[2]
 
