@@ -112,11 +112,11 @@ def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell
     radius = tangent_radius(curves) if tangent_edges(curves).any() else tol.CURVE_TUBE_RADIUS
     far = face_rail_events(events.point, curves.points, box, cell,
                            radius + tol.CURVE_TUBE_GROW + tol.CURVE_FACE_RAIL)
-    if len(ends) > 1 and not far.all():
+    if len(ends) and not far.all():
         # A half-sheet whose trace on a face runs from one curve end to
         # another inside the tube (a curve that dips a few cells into the
-        # box and comes back out through the same face): that trace is
-        # its rail.
+        # box and comes back out through the same face), or passes a
+        # curve end without leaving it: that trace is its rail.
         every = rails(grouped, links, tube_id, np.ones(len(events.point), bool))
         far = face_chords(every, events.point, far, curves.points[ends], box, cell)
     # Along creases the rails' snaps never step back (see strip_triangles).
@@ -217,13 +217,18 @@ def face_rail_events(points: np.ndarray, curve_points: np.ndarray, box: np.ndarr
 
 def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.ndarray, box: np.ndarray,
                 cell: float) -> np.ndarray:
-    """``far`` with the events added of face traces from one curve end on the box to another.
+    """``far`` with the events added of face traces that are whole half-sheets' rails near the curves' ends.
 
-    ``rail_list`` are the tube's rails with every face link on them; a run
+    ``rail_list`` are the tube's rails with every face link on them.  A run
     of their events on the box's faces, starting and ending within
     ``CURVE_FACE_GAP`` cells of two different curve ends, is the whole
     trace of a half-sheet that lies inside the tube between the curve and
-    the face: it is a rail.
+    the face: it is a rail.  So is a stretch of such a run that is not
+    flagged (near a curve end), has events of the rail before and after
+    it, and comes no nearer than ``CURVE_FACE_GAP`` cells to any curve
+    end: a trace that passes the end without leaving it (a sheet's trace
+    on the face turning back beside the end, fuzz s3-410: its rail broke
+    there, and both pieces were fanned to the end).
     """
     axes = _axis_cells(box, cell)
     tree = cKDTree(end_points / axes)
@@ -238,7 +243,15 @@ def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.n
             if b - a < 2:
                 continue
             d, k = tree.query(points[ev[[a, b - 1]]] / axes)
-            if k[0] != k[1] and d.max() <= tol.CURVE_FACE_GAP:
+            if len(end_points) > 1 and k[0] != k[1] and d.max() <= tol.CURVE_FACE_GAP:
+                out[ev[a:b]] = True
+        # Stretches of face events not flagged, inside the rail, away from every end.
+        gap = run & ~far[ev]
+        edges = np.diff(np.concatenate([[0], gap.astype(np.int8), [0]]))
+        for a, b in zip(np.nonzero(edges == 1)[0].tolist(), np.nonzero(edges == -1)[0].tolist()):
+            if a == 0 or b == len(ev):
+                continue
+            if tree.query(points[ev[a:b]] / axes)[0].min() > tol.CURVE_FACE_GAP:
                 out[ev[a:b]] = True
     return out
 
@@ -645,13 +658,16 @@ def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: i
     """The curve's walk from a rail end's snap ``s`` to the curve end on the box it is fanned to, or None.
 
     The nearest curve end within ``reach`` of the rail end ``p``, unless
-    more than half of its walk goes over curve edges the rail's own strip
-    reaches (``zipped``: pairs both ways): then, of the ends at most twice
-    as far, the one whose walk goes over fewest.  A rail beside a curve
-    that runs a few cells from the box over all its length (its trace on
-    a face, an arc from a face back to it) has both ends near both curve
-    ends: each of its ends is fanned to the curve end it points to, not
-    back over the rail's own strip.
+    its walk goes over curve edges the rail's own strip reaches
+    (``zipped``: pairs both ways): then, of the ends at most twice as far,
+    the one whose walk goes over fewest.  A rail beside a curve that runs
+    a few cells from the box over all its length (its trace on a face, an
+    arc from a face back to it) has both ends near both curve ends: each
+    of its ends is fanned to the curve end it points to, not back over the
+    rail's own strip, not even partly: a rail beside a curve running from
+    one face to the next within 4 cells of the first (fuzz s3-818) ends
+    nearer the far curve end, whose walk went back over some of the edges
+    its strip zipped (edges of three and five triangles).
     """
     found = end_tree.query(p, k=min(4, len(box_ends)), distance_upper_bound=reach)
     dist, which = np.atleast_1d(found[0]), np.atleast_1d(found[1])
@@ -663,7 +679,7 @@ def _end_walk(walk, end_tree: cKDTree, box_ends: np.ndarray, p: np.ndarray, s: i
     if not walks:
         return None
     over, d0, w = walks[0]
-    if 2 * over <= len(w) - 1:
+    if over == 0:
         return w
     return min((c for c in walks if c[1] <= 2.0 * d0), key=lambda c: (c[0], c[1]))[2]
 
