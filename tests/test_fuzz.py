@@ -434,12 +434,9 @@ REGRESSIONS = [
      "(-1*y*z - 6/5*x*y + 4*z + 4/7)*(2.68392668968489*z + 0.00940053183485556*y - 0.718225555041655*x"
      " + 0.740281944691867)", ((-1.0, 1.0),) * 3, 8, 64),
     # A curve of singular points the trace could not follow at fine 64 (a
-    # short arc near a face or a box edge: open edges, edges of three; an
-    # arc read as A12/A13 points, a vertex off the surface): traced on the
-    # lattice twice as fine (singmesh/api.py, UNTRACED_RETRIES).
-    ("s3-2 untraced at fine 64",
-     "(-0.759290625094244*x*z^2 + 1.62665227788866*x^3 + 0.0079675053827799)*(5*z^3 - 2*x*z^2 - 8/3*x^3 - 1/4*y)",
-     ((-1.0, 1.0), (-2.0, 2.0), (-0.5, 0.5)), 8, 64),
+    # short arc by a box edge: open edges; an arc read as A12/A13 points, a
+    # vertex off the surface): traced on the lattice twice as fine
+    # (singmesh/api.py, UNTRACED_RETRIES).
     ("s3-566 short arc read as points",
      "(1/2*z^3 - 7/3*y^2*z - 3*y^3 + 1*z^2 - 7*x*y)*(1.30368103590988*y*z^2 + 1.28031267053934*x*y^2"
      " + 1.78407141978226*x^3 - 2.16287016839143*x*y + 0.264696842804438*x)",
@@ -1095,6 +1092,8 @@ def test_double_curve_by_a_box_edge_open(kind, depth, angle, steep, bend):
 OPEN_CASES = [
     (1, 270, "the loop of f1 = f2 = 0 has a cusp at the cubic cone's apex, where the double curve through it "
              "crosses: the loop's half-sheets are also that curve's, and their rails snap to it (open edges)"),
+    (3, 2, "arms of the double curve turning within a cell, traced whole since the hairpin steps "
+           "(trace9): 5 open edges and 59 edges of three triangles where the arms share a tube"),
     (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
     (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
