@@ -706,7 +706,14 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
                     p1, p2, p3, p4 = al * bl, al * bh, ah * bl, ah * bh
                     rl = np.fmin(np.fmin(p1, p2), np.fmin(p3, p4))
                     rh = np.fmax(np.fmax(p1, p2), np.fmax(p3, p4))
-                rl, rh = _down(rl), _up(rh)
+                # A factor exactly [0, 0] (x y on the lattice plane y = 0)
+                # times a finite one is exactly 0: rounded outwards it would
+                # be +-5e-324, which a sqrt makes 2e-162 (sqrt(x y) - z on
+                # the line y = z = 0, where F is 0 throughout, then looked
+                # like no flat piece and was halved without end).
+                zero = (((al == 0) & (ah == 0) & np.isfinite(bl) & np.isfinite(bh))
+                        | ((bl == 0) & (bh == 0) & np.isfinite(al) & np.isfinite(ah)))
+                rl, rh = np.where(zero, 0.0, _down(rl)), np.where(zero, 0.0, _up(rh))
             elif op == "powi":
                 rl, rh = _powi(al, ah, p)
             elif op == "sqrt":

@@ -263,6 +263,51 @@ def test_domain_edges_give_finite_vertices_on_the_surface(text, expr, edge, reso
         assert np.abs(d(*v.T))[open_].min(axis=1).max() <= 2.0 / coarse
 
 
+@pytest.mark.parametrize("text, expr", [
+    ("sqrt(x y) - z", "sqrt(x*y) - z"),
+    ("sqrt(1.23456789012345 x y) - z", "sqrt(1.23456789012345*x*y) - z"),
+    ("sqrt(x z) - 0.712345678901234 y", "sqrt(x*z) - 0.712345678901234*y"),
+])
+def test_root_of_a_product_vanishing_on_lattice_planes_finishes(text, expr):
+    # Issue #10: F is 0 along the lattice line y = z = 0 (x y = 0 there),
+    # but the interval bounds of sqrt(x y) were 2e-162, not 0, and the line
+    # was halved without end (> 90 s on main).  In a child process, so that
+    # a relapse fails at the timeout rather than hanging the suite.
+    import subprocess
+    import sys
+
+    code = ("import warnings, numpy as np, singmesh\n"
+            "warnings.simplefilter('ignore')\n"
+            f"m = singmesh.mesh({text!r}, ((-1.0, 1.0),) * 3)\n"
+            "import io, sys\n"
+            "buf = io.BytesIO()\n"
+            "np.savez(buf, v=m.vertices, f=m.faces)\n"
+            "sys.stdout.buffer.write(buf.getvalue())\n")
+    try:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60, check=True).stdout
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{text}: no mesh in 60 s")
+    import io
+
+    import sympy
+
+    saved = np.load(io.BytesIO(out))
+    v, faces = saved["v"], saved["f"]
+    xyz = sympy.symbols("x y z")
+    f = sympy.lambdify(xyz, sympy.sympify(expr, locals=dict(zip("xyz", xyz))), "numpy")
+    assert len(faces) > 1000 and np.isfinite(v).all()
+    with np.errstate(all="ignore"):
+        fv = f(*v.T)
+    assert np.isfinite(fv).all() and np.abs(fv).max() <= 1e-9
+    assert mc.non_manifold_edges(faces) == []
+    # The mesh ends at the box and within a coarse cell (2 / 32) of the
+    # domain's edges, the two coordinate planes under the root.
+    open_ = np.array(mc.boundary_edges_off_box(v, faces, B1), np.int64).reshape(-1, 2)
+    axes = [i for i, s in enumerate("xyz") if s in expr.split(")")[0]]
+    edge = np.abs(v[:, axes]).min(axis=1)
+    assert edge[open_].min(axis=1).max() <= 2.0 / 32
+
+
 def test_inverse_square_sphere():
     # 1/r^2 - 1 = 0 is the unit sphere; the pole at the centre is inside.
     m = singmesh.mesh("1/(x^2+y^2+z^2) - 1", B15)
