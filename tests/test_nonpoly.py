@@ -263,16 +263,18 @@ def test_domain_edges_give_finite_vertices_on_the_surface(text, expr, edge, reso
         assert np.abs(d(*v.T))[open_].min(axis=1).max() <= 2.0 / coarse
 
 
-@pytest.mark.parametrize("text, expr", [
-    ("sqrt(x y) - z", "sqrt(x*y) - z"),
-    ("sqrt(1.23456789012345 x y) - z", "sqrt(1.23456789012345*x*y) - z"),
-    ("sqrt(x z) - 0.712345678901234 y", "sqrt(x*z) - 0.712345678901234*y"),
+@pytest.mark.parametrize("text, expr, edge", [
+    ("sqrt(x y) - z", "sqrt(x*y) - z", "Min(Abs(x), Abs(y))"),
+    ("sqrt(1.23456789012345 x y) - z", "sqrt(1.23456789012345*x*y) - z", "Min(Abs(x), Abs(y))"),
+    ("sqrt(x z) - 0.712345678901234 y", "sqrt(x*z) - 0.712345678901234*y", "Min(Abs(x), Abs(z))"),
+    ("sqrt(y + z) - z", "sqrt(y + z) - z", "Abs(y + z) / sqrt(2)"),
 ])
-def test_root_of_a_product_vanishing_on_lattice_planes_finishes(text, expr):
-    # Issue #10: F is 0 along the lattice line y = z = 0 (x y = 0 there),
-    # but the interval bounds of sqrt(x y) were 2e-162, not 0, and the line
-    # was halved without end (> 90 s on main).  In a child process, so that
-    # a relapse fails at the timeout rather than hanging the suite.
+def test_root_vanishing_on_a_lattice_line_finishes(text, expr, edge):
+    # Issue #10: F is 0 along the lattice line y = z = 0 (x y = 0, y + z = 0
+    # there), but the interval bounds of sqrt(x y) were 2e-162, not 0 (the
+    # exact zero rounded outwards, then the root), and the line was halved
+    # without end (> 90 s on main).  In a child process, so that a relapse
+    # fails at the timeout rather than hanging the suite.
     import subprocess
     import sys
 
@@ -301,11 +303,10 @@ def test_root_of_a_product_vanishing_on_lattice_planes_finishes(text, expr):
     assert np.isfinite(fv).all() and np.abs(fv).max() <= 1e-9
     assert mc.non_manifold_edges(faces) == []
     # The mesh ends at the box and within a coarse cell (2 / 32) of the
-    # domain's edges, the two coordinate planes under the root.
+    # domain's edge (``edge``: the distance to it).
     open_ = np.array(mc.boundary_edges_off_box(v, faces, B1), np.int64).reshape(-1, 2)
-    axes = [i for i, s in enumerate("xyz") if s in expr.split(")")[0]]
-    edge = np.abs(v[:, axes]).min(axis=1)
-    assert edge[open_].min(axis=1).max() <= 2.0 / 32
+    d = sympy.lambdify(xyz, sympy.sympify(edge, locals=dict(zip("xyz", xyz))), "numpy")(*v.T)
+    assert d[open_].min(axis=1).max() <= 2.0 / 32
 
 
 def test_inverse_square_sphere():
