@@ -487,7 +487,8 @@ def _powi(lo, hi, n):
         return _recip(plo, phi)
     if n == 2:
         mig, mag = _mig_mag(lo, hi)
-        return np.maximum(_down(mig * mig), 0.0), _up(mag * mag)
+        # (0^2 is exactly 0: [0, 0] stays [0, 0], as for the other powers)
+        return np.maximum(_down(mig * mig), 0.0), np.where(mag == 0, 0.0, _up(mag * mag))
     if n == 1:
         return lo, hi
     with np.errstate(over="ignore", invalid="ignore"):
@@ -695,6 +696,10 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
             if op == "add":
                 bl, bh = L[args[1]], H[args[1]]
                 rl, rh = _down(al + bl), _up(ah + bh)
+                # Adding an exact [0, 0] is exact (y + z on the line
+                # y = z = 0): no outward rounding for a sqrt to magnify.
+                za, zb = (al == 0) & (ah == 0), (bl == 0) & (bh == 0)
+                rl, rh = np.where(za, bl, np.where(zb, al, rl)), np.where(za, bh, np.where(zb, ah, rh))
             elif op == "neg":
                 rl, rh = -ah, -al
             elif op == "mul":
@@ -706,7 +711,14 @@ def interval_eval(graph: Graph, outputs, lo: np.ndarray, hi: np.ndarray, force: 
                     p1, p2, p3, p4 = al * bl, al * bh, ah * bl, ah * bh
                     rl = np.fmin(np.fmin(p1, p2), np.fmin(p3, p4))
                     rh = np.fmax(np.fmax(p1, p2), np.fmax(p3, p4))
-                rl, rh = _down(rl), _up(rh)
+                # A factor exactly [0, 0] (x y on the lattice plane y = 0)
+                # times a finite one is exactly 0: rounded outwards it would
+                # be +-5e-324, which a sqrt makes 2e-162 (sqrt(x y) - z on
+                # the line y = z = 0, where F is 0 throughout, then looked
+                # like no flat piece and was halved without end).
+                zero = (((al == 0) & (ah == 0) & np.isfinite(bl) & np.isfinite(bh))
+                        | ((bl == 0) & (bh == 0) & np.isfinite(al) & np.isfinite(ah)))
+                rl, rh = np.where(zero, 0.0, _down(rl)), np.where(zero, 0.0, _up(rh))
             elif op == "powi":
                 rl, rh = _powi(al, ah, p)
             elif op == "sqrt":

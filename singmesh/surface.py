@@ -38,7 +38,7 @@ from singmesh.skeleton.splitting import compose, translate_many
 from .errors import SurfaceError
 from .monomials import _MANY, differentiate, evaluate_tensor, evaluate_tensors, evaluate_tensors_many, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation, unused_message  # noqa: F401  (X, Y, Z re-exported)
-from .tolerances import CANDIDATE_DUST, DISPLAY_DIGITS, MAX_DEGREE, MAX_POWER, ZERO_ULPS
+from .tolerances import CANDIDATE_DUST, DISPLAY_DIGITS, MAX_DEGREE, MAX_POWER, PROJECT_HALVINGS, ZERO_ULPS
 
 #: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
 CHILD_OFFSETS = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
@@ -268,6 +268,12 @@ class Surface(abc.ABC):
     def project(self, points, free: np.ndarray | None = None, iterations: int = 8) -> np.ndarray:
         """Points near the surface moved onto it by Newton steps along grad F.
 
+        Where F is undefined beyond an edge of its domain (``sqrt(x)`` for
+        x < 0), a step that leaves the domain is halved until it does not
+        (at most ``PROJECT_HALVINGS`` times, else the point stays): a
+        surface tangent to the domain's edge (``sqrt(x) + y``) draws full
+        steps across it.  A point given outside the domain stays as it is.
+
         Parameters
         ----------
         points : (K, 3) array_like
@@ -282,15 +288,50 @@ class Surface(abc.ABC):
         (K, 3) ndarray
         """
         p = np.array(points, dtype=float)
-        for _ in range(iterations):
-            # F and grad F in one pass (the same values as apart).
-            f, g = self.value_gradient(p)
-            if free is not None:
-                g = g * free
-            gg = np.einsum("ij,ij->i", g, g)
+        if iterations <= 0:
+            return p
+        # F and grad F in one pass (the same values as apart).
+        f, g = self.value_gradient(p)
+        for i in range(iterations):
+            gf = g if free is None else g * free
+            gg = np.einsum("ij,ij->i", gf, gf)
             step = np.where(gg > 0, f / np.where(gg > 0, gg, 1.0), 0.0)
-            p = p - step[:, None] * g
+            delta = step[:, None] * gf
+            q = p - delta
+            if i == iterations - 1 and self.is_polynomial:
+                # A polynomial is defined everywhere: the last step needs no check.
+                return q
+            fq, gq = self.value_gradient(q)
+            if not self.is_polynomial:
+                q, fq, gq = self._inside_domain(p, f, g, delta, q, fq, gq)
+            p, f, g = q, fq, gq
         return p
+
+    def _inside_domain(self, p, f, g, delta, q, fq, gq):
+        """:meth:`project`'s steps ``p -> q = p - delta`` that left F's domain, halved back into it.
+
+        Rows where F and grad F are finite at ``p`` but not at ``q`` take
+        half the step, again, up to ``PROJECT_HALVINGS`` times; those still
+        outside stay at ``p``.  Returns the new ``q, F(q), grad F(q)``.
+        """
+        def undefined(fv, gv):
+            return ~(np.isfinite(fv) & np.isfinite(gv).all(axis=-1))
+
+        out = np.flatnonzero(undefined(fq, gq) & ~undefined(f, g))
+        if not len(out):
+            return q, fq, gq
+        q, fq, gq = q.copy(), fq.copy(), gq.copy()
+        d = delta[out]
+        for _ in range(PROJECT_HALVINGS):
+            d = 0.5 * d
+            q[out] = p[out] - d
+            fq[out], gq[out] = self.value_gradient(q[out])
+            still = undefined(fq[out], gq[out])
+            out, d = out[still], d[still]
+            if not len(out):
+                return q, fq, gq
+        q[out], fq[out], gq[out] = p[out], f[out], g[out]
+        return q, fq, gq
 
     def is_zero(self, points) -> np.ndarray:
         """Whether F is zero at ``points`` to within its rounding error: bool (...)."""

@@ -103,6 +103,12 @@ ROOT_FREE_ROUNDING = 1e-12
 NEWTON_ITERATIONS = 8
 NEWTON_STEP = 1e-15
 
+#: Surface.project: a Newton step that leaves F's domain (sqrt(x) + y - 0.5
+#: near x = 0, where the surface is tangent to the domain's edge and a full
+#: step lands at x < 0, F = NaN) is halved at most this many times before
+#: the point stays where it was: 2^-30 of a step is below any lattice cell.
+PROJECT_HALVINGS = 30
+
 #: Sign samples between roots of a lattice line are asked whether F is
 #: zero to rounding there (Surface.is_zero) only where |F| is below this
 #: fraction of the largest sample: rounding noise is far below it.

@@ -163,6 +163,28 @@ def test_special_ranges():
     assert r.clipped[1] and not r.clipped[0]                                      # sqrt of [-0.5, 0.5] clipped
 
 
+def test_product_with_an_exact_zero_is_exactly_zero():
+    """x y, y + z and y^2 with y = z = [0, 0] are [0, 0], not +-5e-324: under a sqrt that rounding
+    became 2e-162, and a lattice line on which sqrt(x y) - z is 0 throughout
+    (y = z = 0) looked like no flat piece to the root finder (issue #10's
+    run that did not finish)."""
+    g = Graph()
+    c = 1.23456789012345
+    nodes = [g.from_sympy(e) for e in (x * y, sqrt(x * y) - z, sqrt(c * x * y) - z, (x * y) ** Rational(1, 3) - z,
+                                       sqrt(y + z) - z, sqrt(y**2 + c * z) - y)]
+    lo = np.array([[-1.0, 0.0, 0.0], [0.3, 0.0, 0.0], [-0.7, -0.0, 0.0]])
+    hi = np.array([[1.0, 0.0, 0.0], [0.7, 0.0, 0.0], [-0.1, 0.0, 0.0]])
+    r = interval_eval(g, nodes, lo, hi)
+    assert (r.lo[0] == 0).all() and (r.hi[0] == 0).all()
+    for k in (1, 2, 3, 4, 5):
+        assert (np.abs(r.lo[k]) <= 1e-250).all() and (np.abs(r.hi[k]) <= 1e-250).all()
+    # Operands that are not exactly 0 still round outwards: 1e-200 * 1e-200
+    # and (1e-170)^2 underflow to 0, but are > 0.
+    sq = g.from_sympy(y**2)
+    r = interval_eval(g, [nodes[0], sq], np.array([[1e-200, 1e-200, 0.0]]), np.array([[2e-200, 2e-200, 0.0]]))
+    assert r.lo[0][0] <= 0 < r.hi[0][0] and r.hi[1][0] > 0
+
+
 def test_rfunction_bounds_are_tight():
     """f + g - sqrt(f^2 + g^2) is increasing in f and g: its bounds are its corner values."""
     g = Graph()

@@ -205,6 +205,110 @@ def test_poles_and_domain_edges_leave_no_vertex_off_the_surface(text, f):
     assert mc.non_manifold_edges(m.faces) == []
 
 
+# Domain edges (where F's root or log stops being defined) on a split plane
+# of the box (x = 0, x = +-0.5, x = -0.25: the lattice at every level), on a
+# lattice line (x = y = 0) and in general position, with float coefficients.
+# Text for singmesh, the same F for sympy, and the function whose zero set
+# is the domain's edge (a distance to it up to a factor near 1).
+_A, _B = "0.731234567890123", "0.412345678901234"
+DOMAIN_EDGES = [
+    ("sqrt(x) + y - 0.5", "sqrt(x) + y - 0.5", "x"),
+    ("x^(1/2) + y - 0.5", "x**0.5 + y - 0.5", "x"),
+    ("sqrt(-x) + y - 0.5", "sqrt(-x) + y - 0.5", "x"),
+    ("sqrt(x) + y + z - 0.5", "sqrt(x) + y + z - 0.5", "x"),
+    ("sqrt(x - 0.5) - y", "sqrt(x - 0.5) - y", "x - 0.5"),
+    ("(x + 0.25)^(1/3) + y - 0.2", "(x + 0.25)**(1/3) + y - 0.2", "x + 0.25"),
+    ("(x - 0.123456789012345)^(0.5) + y - 0.3", "(x - 0.123456789012345)**0.5 + y - 0.3", "x - 0.123456789012345"),
+    (f"sqrt({_A} x) + {_B} y + 0.1 z - 0.2", f"sqrt({_A}*x) + {_B}*y + 0.1*z - 0.2", "x"),
+    ("log(x) + y", "log(x) + y", "x"),
+    ("log(x + 0.5) + 3 y", "log(x + 0.5) + 3*y", "x + 0.5"),
+    ("sqrt(x) + sqrt(y) + z - 0.5", "sqrt(x) + sqrt(y) + z - 0.5", "Min(x, y)"),
+    ("sqrt(0.6 x + 0.8 y) + z - 0.5", "sqrt(0.6*x + 0.8*y) + z - 0.5", "0.6*x + 0.8*y"),
+    (f"sqrt({_A} x - {_B} y + 0.1) + 0.3 z - 0.2", f"sqrt({_A}*x - {_B}*y + 0.1) + 0.3*z - 0.2",
+     f"({_A}*x - {_B}*y + 0.1) / sqrt({_A}**2 + {_B}**2)"),
+]
+
+
+@pytest.mark.parametrize("resolution", [(32, 256), (16, 256)], ids=["defaults", "16-256"])
+@pytest.mark.parametrize("text, expr, edge", DOMAIN_EDGES, ids=[d[0] for d in DOMAIN_EDGES])
+def test_domain_edges_give_finite_vertices_on_the_surface(text, expr, edge, resolution):
+    # Issue #10: a Newton step towards a surface tangent to its domain's
+    # edge (sqrt(x) + y - 0.5 near x = 0) landed beyond it, F = NaN: 32
+    # vertices with x = NaN on main at the defaults.  Every vertex must be
+    # finite, in the domain and on F = 0; the mesh ends only at the box's
+    # faces or within a coarse cell of the domain's edge.
+    import sympy
+
+    xyz = sympy.symbols("x y z")
+    F = sympy.sympify(expr, locals=dict(zip("xyz", xyz)))
+    f = sympy.lambdify(xyz, F, "numpy")
+    grad = [sympy.lambdify(xyz, sympy.diff(F, s), "numpy") for s in xyz]
+    d = sympy.lambdify(xyz, sympy.sympify(edge, locals=dict(zip("xyz", xyz))), "numpy")
+    coarse, fine = resolution
+    m = singmesh.mesh(text, B1, coarse=coarse, fine=fine)
+    assert len(m.faces) > 50
+    v = m.vertices
+    assert np.isfinite(v).all() and np.isfinite(m.normals).all()
+    with np.errstate(all="ignore"):
+        fv = f(*v.T)
+        g = np.stack([np.broadcast_to(gi(*v.T), fv.shape) for gi in grad], axis=-1)
+    assert np.isfinite(fv).all()
+    # grad F is infinite (or sympy's form of it 0 / 0) only on the domain's edge.
+    gn = np.linalg.norm(g, axis=1)
+    gn = np.where(np.isfinite(gn), gn, np.inf)
+    assert (np.abs(fv) <= 1e-9 * 2.0 * gn).all()
+    assert mc.non_manifold_edges(m.faces) == []
+    open_ = np.array(mc.boundary_edges_off_box(v, m.faces, B1), np.int64).reshape(-1, 2)
+    if len(open_):
+        assert np.abs(d(*v.T))[open_].min(axis=1).max() <= 2.0 / coarse
+
+
+@pytest.mark.parametrize("text, expr, edge", [
+    ("sqrt(x y) - z", "sqrt(x*y) - z", "Min(Abs(x), Abs(y))"),
+    ("sqrt(1.23456789012345 x y) - z", "sqrt(1.23456789012345*x*y) - z", "Min(Abs(x), Abs(y))"),
+    ("sqrt(x z) - 0.712345678901234 y", "sqrt(x*z) - 0.712345678901234*y", "Min(Abs(x), Abs(z))"),
+    ("sqrt(y + z) - z", "sqrt(y + z) - z", "Abs(y + z) / sqrt(2)"),
+])
+def test_root_vanishing_on_a_lattice_line_finishes(text, expr, edge):
+    # Issue #10: F is 0 along the lattice line y = z = 0 (x y = 0, y + z = 0
+    # there), but the interval bounds of sqrt(x y) were 2e-162, not 0 (the
+    # exact zero rounded outwards, then the root), and the line was halved
+    # without end (> 90 s on main).  In a child process, so that a relapse
+    # fails at the timeout rather than hanging the suite.
+    import subprocess
+    import sys
+
+    code = ("import warnings, numpy as np, singmesh\n"
+            "warnings.simplefilter('ignore')\n"
+            f"m = singmesh.mesh({text!r}, ((-1.0, 1.0),) * 3)\n"
+            "import io, sys\n"
+            "buf = io.BytesIO()\n"
+            "np.savez(buf, v=m.vertices, f=m.faces)\n"
+            "sys.stdout.buffer.write(buf.getvalue())\n")
+    try:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60, check=True).stdout
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{text}: no mesh in 60 s")
+    import io
+
+    import sympy
+
+    saved = np.load(io.BytesIO(out))
+    v, faces = saved["v"], saved["f"]
+    xyz = sympy.symbols("x y z")
+    f = sympy.lambdify(xyz, sympy.sympify(expr, locals=dict(zip("xyz", xyz))), "numpy")
+    assert len(faces) > 1000 and np.isfinite(v).all()
+    with np.errstate(all="ignore"):
+        fv = f(*v.T)
+    assert np.isfinite(fv).all() and np.abs(fv).max() <= 1e-9
+    assert mc.non_manifold_edges(faces) == []
+    # The mesh ends at the box and within a coarse cell (2 / 32) of the
+    # domain's edge (``edge``: the distance to it).
+    open_ = np.array(mc.boundary_edges_off_box(v, faces, B1), np.int64).reshape(-1, 2)
+    d = sympy.lambdify(xyz, sympy.sympify(edge, locals=dict(zip("xyz", xyz))), "numpy")(*v.T)
+    assert d[open_].min(axis=1).max() <= 2.0 / 32
+
+
 def test_inverse_square_sphere():
     # 1/r^2 - 1 = 0 is the unit sphere; the pole at the centre is inside.
     m = singmesh.mesh("1/(x^2+y^2+z^2) - 1", B15)
