@@ -58,6 +58,17 @@ CASES = [
 ]
 
 
+def _point_meshed(mesh, point, want: int, box) -> None:
+    """The point is one vertex with ``want`` fans (the oracle's arcs) when it
+    has any; no open edge inside the box, no non-manifold edge."""
+    d = np.linalg.norm(mesh.vertices - point, axis=1)
+    assert int((d <= 1e-9).sum()) == (1 if want else 0)
+    assert not boundary_edges_off_box(mesh.vertices, mesh.faces, box)
+    assert not non_manifold_edges(mesh.faces)
+    if want:
+        assert fans_at(mesh.faces, int(np.argmin(d))) == want
+
+
 @pytest.mark.parametrize("name,text,f,box,nodes", CASES, ids=[c[0] for c in CASES])
 def test_nodes_on_a_box_face_have_the_fans_inside_the_box(name, text, f, box, nodes):
     with warnings.catch_warnings():
@@ -189,12 +200,7 @@ def test_cones_with_the_apex_on_the_box_boundary(text, m, apex):
         return np.einsum("...i,ij,...j->...", d, m, d)
 
     want = branches_on_sphere(f, apex, 0.05, 240, 480, box=box)
-    d = np.linalg.norm(mesh.vertices - apex, axis=1)
-    assert int((d <= 1e-9).sum()) == (1 if want else 0)
-    assert not boundary_edges_off_box(mesh.vertices, mesh.faces, box)
-    assert not non_manifold_edges(mesh.faces)
-    if want:
-        assert fans_at(mesh.faces, int(np.argmin(d))) == want
+    _point_meshed(mesh, apex, want, box)
 
 
 def _boundary_germs(seed: int):
@@ -238,13 +244,8 @@ def test_degenerate_points_on_the_box_boundary(text, expr, point):
     assert np.linalg.norm(mesh.singular_points - point, axis=1).min() <= 1e-9
     f = sympy.lambdify(sympy.symbols("x y z"), expr, "numpy")
     want = branches_on_sphere(lambda r: f(r[..., 0], r[..., 1], r[..., 2]), point, 0.02, 360, 720, box=box)
-    d = np.linalg.norm(mesh.vertices - point, axis=1)
     # No arc: the nappe points out of the box, the point is all there is.
-    assert int((d <= 1e-9).sum()) == (1 if want else 0)
-    assert not boundary_edges_off_box(mesh.vertices, mesh.faces, box)
-    assert not non_manifold_edges(mesh.faces)
-    if want:
-        assert fans_at(mesh.faces, int(np.argmin(d))) == want
+    _point_meshed(mesh, point, want, box)
 
 
 @pytest.mark.parametrize("box", [((0.0, 1.8),) * 3, ((-1.8, 1.8), (-1.8, 1.8), (0.0, 1.8))], ids=["octant", "half"])
@@ -397,9 +398,4 @@ def test_d4_points_on_the_box_boundary(text, expr, point):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", singmesh.SingularPointWarning)
         mesh = singmesh.mesh(text, box)
-    d = np.linalg.norm(mesh.vertices - point, axis=1)
-    assert int((d <= 1e-9).sum()) == (1 if want else 0)
-    assert not boundary_edges_off_box(mesh.vertices, mesh.faces, box)
-    assert not non_manifold_edges(mesh.faces)
-    if want:
-        assert fans_at(mesh.faces, int(np.argmin(d))) == want
+    _point_meshed(mesh, point, want, box)
