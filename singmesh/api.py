@@ -454,16 +454,6 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
                          raises + 1)
         except MemoryBudgetError:
             pass
-    # A curve of singular points the trace could not follow (an arc of a
-    # double curve shorter than two trace steps, dipping into the box from
-    # a face: fuzz s1-682) is traced on a lattice twice as fine, where it is
-    # twice as many steps long.
-    if overflow and raises < tol.UNTRACED_RETRIES and fine_level < tol.MAX_LEVEL:
-        try:
-            return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
-                         raises + 1)
-        except MemoryBudgetError:
-            pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
     for note in m.singular_point_warnings() + m.curve_warnings():

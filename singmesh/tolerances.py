@@ -198,11 +198,6 @@ THIN_RETRIES = 3
 #: ... (a sign seen only below this fraction is rounding: x^2 - 1e-20).
 SIGN_RESOLVED = 1e-10
 
-#: A mesh with a curve of singular points the trace could not follow is
-#: made again with the fine level doubled this many times at most (a short
-#: arc of a double curve is traced at fine 128 where fine 64 missed it).
-UNTRACED_RETRIES = 1
-
 #: Points of the creases count as apart (for CREASE_MIN_GAP) when the way
 #: between them along the creases is longer than this times their
 #: distance: two creases meeting at a corner at more than ~40 degrees are

@@ -433,17 +433,6 @@ REGRESSIONS = [
     ("s3-978 curve cutting a box edge",
      "(-1*y*z - 6/5*x*y + 4*z + 4/7)*(2.68392668968489*z + 0.00940053183485556*y - 0.718225555041655*x"
      " + 0.740281944691867)", ((-1.0, 1.0),) * 3, 8, 64),
-    # A curve of singular points the trace could not follow at fine 64 (a
-    # short arc by a box edge: open edges; an arc read as A12/A13 points, a
-    # vertex off the surface): traced on the lattice twice as fine
-    # (singmesh/api.py, UNTRACED_RETRIES).
-    ("s3-566 short arc read as points",
-     "(1/2*z^3 - 7/3*y^2*z - 3*y^3 + 1*z^2 - 7*x*y)*(1.30368103590988*y*z^2 + 1.28031267053934*x*y^2"
-     " + 1.78407141978226*x^3 - 2.16287016839143*x*y + 0.264696842804438*x)",
-     ((-2.0, 2.0), (-1.5, 1.5), (-1.0, 1.0)), 8, 64),
-    ("s4-498 short arc by a box edge",
-     "(0.420938814319004*z - 0.151677491934424*y)*(4/7*y*z^2 + 7/5*y^3 + 3/4*y*z - 4*x*y - 2*x - 2/3)",
-     ((-1.0, 1.0),) * 3, 8, 64),
     # A lens thinner than a cell round a cuspidal edge: all tube, the mesh
     # was empty; made again on finer lattices (THIN_RETRIES).
     ("s3-925 lens round a cuspidal edge",
@@ -584,6 +573,16 @@ def _common_zeros(f1, f2, box, n: int = 41) -> np.ndarray:
     return p[ok]
 
 
+#: Not traced yet: keeping the short clusters and traces that reach the box
+#: (skeleton/singular_curves.py, tried) traced both, but broke fuzz s1-66
+#: and s1-350 (their newly traced arcs' tubes left edges of 3 triangles).
+#: Meshing again at fine 128 whenever a curve is left untraced traced both
+#: arcs (and s3-566, s4-498), but broke s3-378 and s3-385 (edges of three,
+#: vertices 1e-7 off F = 0 on their curves traced at 128): reverted.
+SHORT_ARCS_TODO = "a double curve shorter than two trace steps is taken for an isolated point's samples"
+
+
+@pytest.mark.xfail(strict=True, reason=SHORT_ARCS_TODO)
 @pytest.mark.parametrize("name, text, box", SHORT_ARCS, ids=[c[0] for c in SHORT_ARCS])
 def test_short_arc_of_double_curve_is_traced(name, text, box):
     """The arc is followed by mesh edges with four triangles (two sheets
@@ -597,12 +596,7 @@ def test_short_arc_of_double_curve_is_traced(name, text, box):
     b = case.box_array()
     arc = _common_zeros(*(fc.Field(f) for f in case.factors), b)
     assert len(arc) >= 10
-    # At fine 64 the arc is shorter than two trace steps and not traced;
-    # the mesh is made again at fine 128, where it is.
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        m = singmesh.mesh(text, box, coarse=8, fine=64)
-    assert not [w for w in caught if "could not be traced" in str(w.message)]
+    m = singmesh.mesh(text, box, coarse=8, fine=64)
     counts = mc.edge_counts(m.faces)
     edges = np.array([e for e, k in counts.items() if k == 4])
     assert len(edges), "no edge where the two sheets cross"
@@ -612,6 +606,19 @@ def test_short_arc_of_double_curve_is_traced(name, text, box):
     far = cKDTree(on).query(arc)[0]
     assert far.max() <= cell, f"arc points {far.max() / cell:.2g} cells from the crossing edges"
     assert fc.judge(case, 8, 64).status == "clean"
+
+
+@pytest.mark.parametrize("name, text, box", SHORT_ARCS, ids=[c[0] for c in SHORT_ARCS])
+def test_an_untraced_arc_is_said(name, text, box):
+    """Until such arcs are traced, a mesh that does not follow one says so
+    (a warning, not only a note in the report): never silently wrong."""
+    import singmesh
+
+    case = fc.case_from_text(name, text, box)
+    arc = _common_zeros(*(fc.Field(f) for f in case.factors), case.box_array())
+    assert len(arc) >= 10  # the arc is there (Newton on the two factors)
+    with pytest.warns(singmesh.SingularPointWarning, match="could not be traced"):
+        singmesh.mesh(text, box, coarse=8, fine=64)
 
 
 @pytest.mark.parametrize("seed, depth", [(11, 0.06), (11, 0.059), (11, 0.055), (11, 0.065), (12, 0.06)])
@@ -1097,10 +1104,12 @@ OPEN_CASES = [
     (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
     (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
+    (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
     (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
     (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
             "four only on a product's curve; maybe its limit, not checked)"),
     (4, 206, "a plane and a cubic: non-manifold edges"),
+    (4, 498, "two close vertices and open edges where the double curve nears the box's edge x = 1, y = -1"),
     (4, 542, "91 edges of three triangles"),
     (4, 850, "non-manifold edges in a random box"),
 ]
