@@ -35,7 +35,7 @@ from .errors import SurfaceError
 from .memory import Budget, MemoryBudgetError, parse_size
 from .mesh import UNRESOLVED_EMPTY, CreaseWarning, EmptyMeshWarning, Mesh, SingularPointWarning, cuspidal_crease_refusal
 from .squarefree import squarefree
-from .surface import Surface
+from .surface import CHILD_OFFSETS, Surface
 
 DEFAULT_BOX = ((-2.0, 2.0), (-2.0, 2.0), (-2.0, 2.0))
 
@@ -477,8 +477,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
 
 def _signs_resolved(surface: Surface, tree: Octree) -> bool:
     """Whether F takes both signs at the leaves' corners with values above ``SIGN_RESOLVED`` of the largest."""
-    offsets = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T
-    corners = (tree.corner[:, None, :] + offsets[None] * tree.size[:, None, None]).reshape(-1, 3)
+    corners = (tree.corner[:, None, :] + CHILD_OFFSETS[None] * tree.size[:, None, None]).reshape(-1, 3)
     with np.errstate(all="ignore"):
         f = surface(tree.lattice_to_space(np.unique(corners, axis=0)))
     f = f[np.isfinite(f)]

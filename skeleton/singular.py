@@ -326,13 +326,12 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
         # and triple points are the curve's special points, not isolated
         # ones), in a few steps where it is near; the ends off it are
         # points beside the curve.
-        y = gauss_newton(surface, (near_lo + near_hi) / 2, iterations=tol.CURVE_NEAR_STEPS[0])
-        off = tree.query(y)[0] > on_radius
-        y, near_lo, near_hi = y[off], near_lo[off], near_hi[off]
-        y = gauss_newton(surface, y, iterations=tol.CURVE_NEAR_STEPS[1])
-        off = tree.query(y)[0] > on_radius
-        good = accepted(y[off], near_lo[off], near_hi[off])
-        x = np.concatenate([x, y[off][good]])
+        y = (near_lo + near_hi) / 2
+        for steps in tol.CURVE_NEAR_STEPS:
+            y = gauss_newton(surface, y, iterations=steps)
+            off = tree.query(y)[0] > on_radius
+            y, near_lo, near_hi = y[off], near_lo[off], near_hi[off]
+        x = np.concatenate([x, y[accepted(y, near_lo, near_hi)]])
     # Starts along a curve the clump test missed (a clump of candidates
     # spread over a sheet, where Newton across does not settle) end densely
     # along it: a chain of end points CURVE_SPAN boxes long.
