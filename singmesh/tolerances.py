@@ -686,6 +686,15 @@ CURVE_CROSSING_MIN_VERTICES = 4
 #: ... and only on a piece at least this many times that reach long (a
 #: shorter one is all ends on the box).
 CURVE_CROSSING_MIN_LENGTH = 4.0
+#: ... and only at vertices farther than that reach and this many cells
+#: from every other curve (not joined to it): the wide tube reaches its
+#: radius and CURVE_TUBE_GROW - CURVE_TUBE_RADIUS more into non-simple
+#: leaves, the other curve's tube CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and
+#: where they meet both curves are in one tube and the sheet between them
+#: has no rail (fuzz s4-838: a plane along a cubic's line at 3.6 degrees,
+#: wide 10 cells, the other branch of their curve 12 cells away; triangles
+#: from a rail on the box's face 13 cells out to both curves).
+CURVE_WIDE_APART = 2 * CURVE_TUBE_GROW + 1.0
 
 #: A rail with both ends on one face of the box at most this many cells
 #: apart is a stub of a half-sheet's trace that ran along the face

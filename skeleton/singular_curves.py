@@ -1366,7 +1366,10 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
     T = _tangents(P, E)
     names, sheets, arcs = transversal_types(surface, P, T, tol.CURVE_CIRCLE_RADIUS * step)
     out = _pieces(surface, box, P, E, cross, names, sheets, arcs, step)
-    return _tube_widths(surface, out, step)
+    # The fine cell along each axis (the lattice's: the box's sides over
+    # one power of two, the largest ``step``).
+    sides = box[:, 1] - box[:, 0]
+    return _tube_widths(surface, out, step, sides * (step / float(sides.max())))
 
 
 #: Special points whose whole ball (CURVE_MEET_BALL cells) is tube
@@ -1374,7 +1377,7 @@ def singular_curves(surface: Surface, box, step: float, level: int = 6) -> Curve
 _MEET_KINDS = ("crossing of cuspidal edges",)
 
 
-def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
+def _tube_widths(surface: Surface, curves: CurveSet, step: float, cell: np.ndarray | None = None) -> CurveSet:
     """Which edges need a wide tube, and its radius: from the branches' separation measured across the curve.
 
     Across a curve of rank-1 type (A_k, k >= 2) the branches are tangent
@@ -1404,6 +1407,7 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     if len(specials):
         d = np.abs(curves.points[:, None, :] - specials[None]).max(axis=2).min(axis=1)
         near_special = d <= tol.CURVE_BALL_GROW * step
+    apart = None  # distance (cells) from each vertex to the other curves, when needed
     for c in curves.pieces:
         # A piece as a whole: its median (where a cusp degenerates at a
         # special point, the balls around it widen the tube).  The tacnode
@@ -1422,8 +1426,13 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
                 # box (a curve across a thin box): the tube would fill it.
                 length = float(np.linalg.norm(np.diff(curves.points[c.vertices], axis=0), axis=1).sum()) / step
                 if rc > tol.CURVE_CROSSING_RADIUS and length >= tol.CURVE_CROSSING_MIN_LENGTH * rc:
-                    v_wide[c.vertices] = True
-                    need[c.vertices] = rc
+                    if apart is None:
+                        apart = _other_curve_distance(curves, np.full(3, step) if cell is None else cell)
+                    # Not where the wide tube would take in another curve
+                    # (CURVE_WIDE_APART): then the usual tube, as a whole.
+                    if apart[c.vertices].min() > rc + tol.CURVE_WIDE_APART:
+                        v_wide[c.vertices] = True
+                        need[c.vertices] = rc
             continue
         tacnode = c.sheets >= 2 and not c.type.startswith(("A1", "D4"))
         if tacnode or (c.sheets >= 1 and r > tol.CURVE_TANGENT_RADIUS):
@@ -1447,6 +1456,28 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     curves.wide = wide
     curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
     return curves
+
+
+def _other_curve_distance(curves: CurveSet, cell: np.ndarray) -> np.ndarray:
+    """Distance (max norm, cells) from each curve vertex to the nearest vertex of another connected curve.
+
+    Measured as the tubes are (:func:`singmesh.facets.tubes._tube_leaves`);
+    inf where there is no other curve.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(curves.points)
+    e = curves.edges
+    _, label = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)),
+                                    directed=False)
+    out = np.full(n, np.inf)
+    for k in np.unique(label):
+        mine = label == k
+        if mine.all():
+            break
+        out[mine] = cKDTree(curves.points[~mine] / cell).query(curves.points[mine] / cell, p=np.inf)[0]
+    return out
 
 
 def crossing_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:

@@ -433,6 +433,12 @@ REGRESSIONS = [
     ("s3-978 curve cutting a box edge",
      "(-1*y*z - 6/5*x*y + 4*z + 4/7)*(2.68392668968489*z + 0.00940053183485556*y - 0.718225555041655*x"
      " + 0.740281944691867)", ((-1.0, 1.0),) * 3, 8, 64),
+    # A plane through a cubic's line at 3.6 degrees (the line's wide tube)
+    # and the other branches of their curve 1.4 to 15 cells from it: the
+    # wide tube held them and the sheet between had no rail (open edges).
+    # Clean on a5ab96f only by a false crossing that cut the line.
+    ("s4-838 wide tube beside another curve", "(-2/7*y + 3/2*x)*(7*y^2*z - 8/3*y^3 - 8*x^2 + 8/7*y - 9*x)",
+     ((-0.32, 0.32), (-0.6807690826262665, 2.1236539676916917), (-1.3482142494226852, 1.3944050195806525)), 8, 64),
     # A lens thinner than a cell round a cuspidal edge: all tube, the mesh
     # was empty; made again on finer lattices (THIN_RETRIES).
     ("s3-925 lens round a cuspidal edge",
@@ -963,6 +969,63 @@ def test_curve_traced_through_an_apex_and_round_a_hairpin(name, text):
     assert v.status == "clean", v.detail
 
 
+#: (slope, a, turn axis, angle, shift): the plane x = 0 times the sheet
+#: x = slope y - a y^2 z, turned and shifted (15-digit coefficients).  Both
+#: hold the z-axis, crossing along it at atan(slope) = 7-9 degrees: 1.5
+#: cells apart only 9-10 cells out, so the axis gets the wide tube.  Their
+#: other curve, the hyperbola y z = slope / a in x = 0, passes 5 to 19
+#: cells from the axis over most of the box (the feature of fuzz s4-838,
+#: a plane through a cubic's line at 3.6 degrees).
+WIDE_BESIDE_A_CURVE = [
+    (0.151, 0.612, (0.33, -1.303, 0.905), 0.156, (0.033, -0.009, 0.005)),
+    (0.122, 0.524, (0.547, -0.736, -0.163), 0.126, (-0.005, -0.037, -0.01)),
+    (0.151, 0.649, (-0.506, 0.594, 0.891), 0.247, (-0.031, 0.03, -0.031)),
+]
+
+
+@pytest.mark.parametrize("slope, a, axis, angle, shift", WIDE_BESIDE_A_CURVE,
+                         ids=[f"slope {c[0]} a {c[1]}" for c in WIDE_BESIDE_A_CURVE])
+def test_wide_tube_beside_another_curve(slope, a, axis, angle, shift):
+    """Two sheets crossing at a few degrees along a line, and another curve
+    of theirs within the line's wide tube: every edge inside the box has
+    two triangles or four, every point of f1 = f2 = 0 found here by Newton
+    on the factors lies within half a cell of a mesh edge whose ends are on
+    both factors, and the judge passes.  On main (and on
+    a5ab96f, where a false crossing of the traces cut the line) the wide
+    tube held both curves and the sheet between them had no rail: triangles
+    from a rail 12 cells out to both curves (open edges, edges of three)."""
+    import meshcheck as mc
+    import singmesh
+    from scipy.spatial import cKDTree
+
+    box = ((-1.0, 1.0),) * 3
+    text = _tilted_product(("x", f"x - {slope}*y + {a}*y^2*z"), axis, angle, (0.0, 0.0, 0.0), shift)
+    case = fc.case_from_text(f"wide {slope} {a}", text, box)
+    b = case.box_array()
+    curve = _common_zeros(*(fc.Field(f) for f in case.factors), b)
+    assert len(curve) >= 1000
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = singmesh.mesh(text, box, coarse=8, fine=64)
+    V = np.asarray(m.vertices)
+    wrong = [(k, V[e[0]].round(3).tolist()) for e, k in mc.edge_counts(m.faces).items()
+             if k not in (2, 4) and not (k == 1 and mc._same_box_face(V[e[0]], V[e[1]], b))]
+    assert not wrong, wrong[:5]
+    # The mesh's edges between vertices on both factors, each sampled at eighths.
+    both = np.ones(len(V), bool)
+    for f in case.factors:
+        fld = fc.Field(f)
+        both &= np.abs(fld.value(V)) <= 1e-9 * np.maximum(np.linalg.norm(fld.grad(V), axis=1), 1e-300)
+    e = np.array([e for e in mc.edge_counts(m.faces) if both[e[0]] and both[e[1]]], np.int64).reshape(-1, 2)
+    u = np.linspace(0.0, 1.0, 9)[:, None, None]
+    on = (V[e[:, 0]] * (1 - u) + V[e[:, 1]] * u).reshape(-1, 3)
+    cell = 2.0 / 64
+    far = cKDTree(on).query(curve)[0]
+    assert far.max() <= 0.5 * cell, f"curve points {far.max() / cell:.2g} cells from mesh edges on the curve"
+    v = fc.judge(case, 8, 64)
+    assert v.status == "clean", v.detail
+
+
 def _line_factor(n, p) -> str:
     """The plane through p with normal n as text, 15 digits (as users give them)."""
     return f"({n[0]:.15g}*x + {n[1]:.15g}*y + {n[2]:.15g}*z + {-float(np.dot(n, p)):.15g})"
@@ -1113,8 +1176,6 @@ OPEN_CASES = [
     (4, 530, "open and non-manifold edges next to the double curve: clean on a5ab96f, broken by the "
              "hairpin and apex steps of the trace (9248289); not fixed yet"),
     (4, 542, "91 edges of three triangles"),
-    (4, 838, "open edges near the double curve: clean on a5ab96f, broken by the hairpin and apex steps "
-             "of the trace (9248289); not fixed yet"),
     (4, 850, "non-manifold edges in a random box"),
 ]
 
