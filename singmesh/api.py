@@ -596,7 +596,7 @@ def _fine_for_creases(gap: float, fine_level: int) -> int:
 def _fine_for_curves(gap: float, fine_level: int) -> int:
     """The fine level at which singular curves ``gap`` fine cells apart are ``CREASE_MIN_GAP`` cells apart.
 
-    Only where one level does it (``gap`` at least ``CURVE_GAP_LEAST``):
+    Only where one level parts them (``gap`` at least ``CURVE_GAP_LEAST``):
     branches that meet tangentially (a loop of the double curve with a
     cusp at a cone's apex, fuzz s1-270) come arbitrarily close, and no
     level parts them.  At most ``MAX_LEVEL``.

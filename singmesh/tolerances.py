@@ -173,10 +173,18 @@ CREASE_MIN_GAP = 12.0
 #: between them lost where the tubes merge); the fine level is doubled
 #: for them CURVE_GAP_MAX_RAISE times at most, and only where that parts
 #: them (a gap of at least CURVE_GAP_LEAST cells): branches meeting
-#: tangentially come arbitrarily close (s1-270's loop at a cone's apex),
-#: and the lattice would only grow.
+#: tangentially come arbitrarily close (s1-270's loop at a cone's apex,
+#: 0.0008 cells), and the lattice would only grow.  One level is enough
+#: well below CREASE_MIN_GAP / 2 (the least it was): stretches of a double
+#: curve 2.4 to 5.9 cells apart share a tube at fine 64 and are meshed
+#: right at 128 (fuzz s3-2, s3-950, s3-534, s4-542, s4-530: edges of three
+#: triangles and open edges between them); at 1.1 to 1.4 cells (s3-474,
+#: s4-530 turned) they are not, and two traces 4.5 cells apart (s4-410,
+#: clean at 64 by luck) are 9 apart at 128 and still share a tube there
+#: (edges of six): one level does not part everything, more was not tried
+#: for want of time (at 256 s4-410 is clean, s4-530 is not).
 CURVE_GAP_MAX_RAISE = 1
-CURVE_GAP_LEAST = CREASE_MIN_GAP / 2
+CURVE_GAP_LEAST = 2.0
 
 #: ... at most this many levels (8 times finer); closer creases keep the
 #: lattice and the gap is reported in Mesh.stats.
@@ -686,8 +694,9 @@ CURVE_CROSSING_MIN_VERTICES = 4
 #: ... and only on a piece at least this many times that reach long (a
 #: shorter one is all ends on the box).
 CURVE_CROSSING_MIN_LENGTH = 4.0
-#: ... and only at vertices farther than that reach and this many cells
-#: from every other curve (not joined to it): the wide tube reaches its
+#: ... and only on a piece all of whose vertices are farther than that
+#: reach and this many cells from every other curve (not joined to it):
+#: the wide tube reaches its
 #: radius and CURVE_TUBE_GROW - CURVE_TUBE_RADIUS more into non-simple
 #: leaves, the other curve's tube CURVE_TUBE_RADIUS + CURVE_TUBE_GROW, and
 #: where they meet both curves are in one tube and the sheet between them

@@ -439,6 +439,19 @@ REGRESSIONS = [
     # Clean on a5ab96f only by a false crossing that cut the line.
     ("s4-838 wide tube beside another curve", "(-2/7*y + 3/2*x)*(7*y^2*z - 8/3*y^3 - 8*x^2 + 8/7*y - 9*x)",
      ((-0.32, 0.32), (-0.6807690826262665, 2.1236539676916917), (-1.3482142494226852, 1.3944050195806525)), 8, 64),
+    # Stretches of a double curve 2.4 to 5 cells apart (fine 64) sharing one
+    # tube: edges of three triangles and open edges between them; the
+    # lattice is made one level finer for them now (CURVE_GAP_LEAST).
+    ("s3-2 arms of a curve 2.4 cells apart",
+     "(-0.759290625094244*x*z^2 + 1.62665227788866*x^3 + 0.0079675053827799)*(5*z^3 - 2*x*z^2 - 8/3*x^3 - 1/4*y)",
+     ((-1.0, 1.0), (-2.0, 2.0), (-0.5, 0.5)), 8, 64),
+    ("s3-534 curves 4 cells apart", "(4*x^2 - 5/3*y)*(-9*y^2*z - 8*x*z^2 - 6/7*x*y^2 + 6/5*z^2 + 6/7*z)",
+     ((-1.0, 1.0),) * 3, 8, 64),
+    ("s3-950 arms of a curve 3.2 cells apart", "(-5*z + 6*x)*(1/4*y^2 - 2*x*y + 8*x^2 - 2*z)",
+     ((-2.0, 2.0), (-1.5, 1.5), (-1.5, 1.5)), 8, 64),
+    ("s4-542 arms of a curve 5 cells apart",
+     "(3/2*z - 1/2*y - 1*x + 5/4)*(-0.166667770474241*y^3 + 0.615248984501005*x*z^2 - 0.67931481614932*x^2*y"
+     " - 2.62257286516497*y^2)", ((-1.5, 1.5),) * 3, 8, 64),
     # A lens thinner than a cell round a cuspidal edge: all tube, the mesh
     # was empty; made again on finer lattices (THIN_RETRIES).
     ("s3-925 lens round a cuspidal edge",
@@ -987,20 +1000,26 @@ WIDE_BESIDE_A_CURVE = [
                          ids=[f"slope {c[0]} a {c[1]}" for c in WIDE_BESIDE_A_CURVE])
 def test_wide_tube_beside_another_curve(slope, a, axis, angle, shift):
     """Two sheets crossing at a few degrees along a line, and another curve
-    of theirs within the line's wide tube: every edge inside the box has
-    two triangles or four, every point of f1 = f2 = 0 found here by Newton
-    on the factors lies within half a cell of a mesh edge whose ends are on
-    both factors, and the judge passes.  On main (and on
-    a5ab96f, where a false crossing of the traces cut the line) the wide
-    tube held both curves and the sheet between them had no rail: triangles
-    from a rail 12 cells out to both curves (open edges, edges of three)."""
+    of theirs within the line's wide tube: checked as
+    :func:`_two_factor_mesh_checked`.  On main (and on a5ab96f, where a
+    false crossing of the traces cut the line) the wide tube held both
+    curves and the sheet between them had no rail: triangles from a rail
+    12 cells out to both curves (open edges, edges of three)."""
+    text = _tilted_product(("x", f"x - {slope}*y + {a}*y^2*z"), axis, angle, (0.0, 0.0, 0.0), shift)
+    _two_factor_mesh_checked(f"wide {slope} {a}", text, ((-1.0, 1.0),) * 3)
+
+
+def _two_factor_mesh_checked(name: str, text: str, box) -> None:
+    """Mesh a product of two factors (coarse 8, fine 64) and check it against
+    the factors: every edge inside the box has two triangles or four,
+    every point of f1 = f2 = 0 found by Newton on the factors lies within
+    half a (fine 64) cell of a mesh edge whose ends are on both factors,
+    and the judge passes."""
     import meshcheck as mc
     import singmesh
     from scipy.spatial import cKDTree
 
-    box = ((-1.0, 1.0),) * 3
-    text = _tilted_product(("x", f"x - {slope}*y + {a}*y^2*z"), axis, angle, (0.0, 0.0, 0.0), shift)
-    case = fc.case_from_text(f"wide {slope} {a}", text, box)
+    case = fc.case_from_text(name, text, box)
     b = case.box_array()
     curve = _common_zeros(*(fc.Field(f) for f in case.factors), b)
     assert len(curve) >= 1000
@@ -1019,11 +1038,42 @@ def test_wide_tube_beside_another_curve(slope, a, axis, angle, shift):
     e = np.array([e for e in mc.edge_counts(m.faces) if both[e[0]] and both[e[1]]], np.int64).reshape(-1, 2)
     u = np.linspace(0.0, 1.0, 9)[:, None, None]
     on = (V[e[:, 0]] * (1 - u) + V[e[:, 1]] * u).reshape(-1, 3)
-    cell = 2.0 / 64
+    cell = float(np.ptp(b, axis=1).max()) / 64
     far = cKDTree(on).query(curve)[0]
     assert far.max() <= 0.5 * cell, f"curve points {far.max() / cell:.2g} cells from mesh edges on the curve"
     v = fc.judge(case, 8, 64)
     assert v.status == "clean", v.detail
+
+
+#: s4-530's factors: a cubic cone (apex at the origin, outside the box's
+#: curve) and a quadric; their double curve turns within a cell at
+#: (-0.18, 0.12, 0.42), and two stretches of it pass 5.6 to 5.9 fine cells
+#: apart (max norm; the box is four times thinner in z): closer than two
+#: tubes' width (CREASE_MIN_GAP), under the old CURVE_GAP_LEAST of 6.
+S4_530 = ("-3/4*z^3 + 8/3*y*z^2 + 3/5*x*y*z + 5*x*y^2 - 3*x^3",
+          "-2.81367693149033*x*y + 2.19362086299765*x^2 - 2.49478317102428*z + 1.00106264290257*y"
+          " + 0.798474291009399")
+S4_530_BOX = ((-2.0, 2.0), (-1.5, 1.5), (-0.5, 0.5))
+CLOSE_STRETCHES = [
+    ("s4-530", "*".join(f"({f})" for f in S4_530)),
+    ("s4-530 turned 1", _tilted_product(S4_530, (0.346, 0.822, 0.33), 0.143, (0.0, 0.0, 0.0), (-0.011, -0.005, 0.02))),
+    ("s4-530 turned 2", _tilted_product(S4_530, (0.581, 0.365, 0.294), 0.118, (0.0, 0.0, 0.0), (0.002, -0.01, 0.017))),
+    ("s4-530 turned 3", _tilted_product(S4_530, (-0.276, 1.294, 1.007), 0.145, (0.0, 0.0, 0.0), (0.013, 0.002, -0.013))),
+]
+
+
+@pytest.mark.parametrize("name, text", CLOSE_STRETCHES, ids=[c[0] for c in CLOSE_STRETCHES])
+def test_close_stretches_of_a_double_curve_are_parted(name, text):
+    """Two stretches of the double curve 2 to 6 cells apart share one tube
+    at fine 64; the lattice is made one level finer (CURVE_GAP_LEAST), and
+    every edge inside the box has two triangles or four, every point of
+    f1 = f2 = 0 found here by Newton on the factors lies within half a
+    (fine 64) cell of a mesh edge whose ends are on both factors, and the
+    judge passes.  On main the sheet between the stretches had no rail:
+    36 curve edges of three triangles and open edges between the curves
+    (fuzz s4-530; clean on a5ab96f only where a false crossing cut the
+    curve and one of its arms was not traced, 7 cells off)."""
+    _two_factor_mesh_checked(name, text, S4_530_BOX)
 
 
 def _line_factor(n, p) -> str:
@@ -1162,20 +1212,16 @@ def test_double_curve_by_a_box_edge_open(kind, depth, angle, steep, bend):
 OPEN_CASES = [
     (1, 270, "the loop of f1 = f2 = 0 has a cusp at the cubic cone's apex, where the double curve through it "
              "crosses: the loop's half-sheets are also that curve's, and their rails snap to it (open edges)"),
-    (3, 2, "arms of the double curve turning within a cell, traced whole since the hairpin steps "
-           "(trace9): 5 open edges and 59 edges of three triangles where the arms share a tube"),
     (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
-    (3, 534, "three double curves: open edges on a sheet, edges of three triangles"),
     (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
-    (3, 950, "a double curve crossing the face y = 1.5 steeply: 79 edges of three triangles near it"),
     (4, 33, "edges of four triangles along the z-axis, a double line of F (not a product: the judge allows "
             "four only on a product's curve; maybe its limit, not checked)"),
     (4, 206, "a plane and a cubic: non-manifold edges"),
     (4, 498, "two close vertices and open edges where the double curve nears the box's edge x = 1, y = -1"),
-    (4, 530, "open and non-manifold edges next to the double curve: clean on a5ab96f, broken by the "
-             "hairpin and apex steps of the trace (9248289); not fixed yet"),
-    (4, 542, "91 edges of three triangles"),
+    (4, 410, "two traces of the double curve 4.5 cells apart (fine 64; clean there): the lattice is made "
+             "one level finer for them (CURVE_GAP_LEAST), where they are 9 cells apart and still share a "
+             "tube: 45 edges of six triangles"),
     (4, 850, "non-manifold edges in a random box"),
 ]
 
