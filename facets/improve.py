@@ -145,23 +145,46 @@ def _any_corner(flags, f):
     return flags[f[:, 0]] | flags[f[:, 1]] | flags[f[:, 2]]
 
 
-def _max_cos(p, q, r):
-    """Largest cosine of the angles of triangles (p, q, r), (3, n) each: the smallest angle's."""
-    u, w, x = q - p, r - q, p - r
-    lu, lw, lx = _dot(u, u), _dot(w, w), _dot(x, x)
-    c0 = -_dot(x, u) / np.sqrt(np.maximum(lx * lu, 1e-300))
-    c1 = -_dot(u, w) / np.sqrt(np.maximum(lu * lw, 1e-300))
-    c2 = -_dot(w, x) / np.sqrt(np.maximum(lw * lx, 1e-300))
-    return np.maximum(np.maximum(c0, c1), c2)
-
-
 def _lean(p, q, r, ref):
     """Cosine between the normals of triangles (p, q, r) and ``ref``; -1 where no area."""
-    n = _cross(q - p, r - p)
+    return _lean_of(_geometry(p, q, r), ref)
+
+
+def _geometry(p, q, r):
+    """Edge vectors and squared lengths of triangles (p, q, r), (3, n) each.
+
+    Returns ``(u, v, w, l0, l1, l2)``: u = q - p, v = r - q, w = r - p and
+    their squared lengths.  With the corners in a triangle's order these
+    are its edges e0 = u, e1 = v, e2 = -w (negation is exact: the products
+    and sums below give the bits of the same sums over e2).
+    """
+    u, v, w = q - p, r - q, r - p
+    return u, v, w, _dot(u, u), _dot(v, v), _dot(w, w)
+
+
+def _lean_of(geo, ref):
+    """:func:`_lean` from :func:`_geometry`."""
+    u, _, w, l0, l1, l2 = geo
+    n = _cross(u, w)
     ln = _dot(n, n)
-    longest = np.maximum(np.maximum(_dot(q - p, q - p), _dot(r - q, r - q)), _dot(p - r, p - r))
+    longest = np.maximum(np.maximum(l0, l1), l2)
     c = _dot(n, ref) / np.sqrt(np.maximum(ln * _dot(ref, ref), 1e-300))
     return np.where(np.sqrt(ln) > tol.ZERO_AREA * longest, c, -1.0)
+
+
+def _shape_of(geo):
+    """The products the shape of a triangle needs, from :func:`_geometry`:
+    (l0, l1, l2, d0, d1, d2), with d_i the dot product of the two edges at
+    corner i, pointing away from it (``-e_prev . e_i``)."""
+    u, v, w, l0, l1, l2 = geo
+    return l0, l1, l2, _dot(u, w), -_dot(u, v), _dot(v, w)
+
+
+def _big_of(l0, l1, l2, d0, d1, d2):
+    """Largest cosine of a triangle's angles (its smallest angle's) from :func:`_shape_of`."""
+    return np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
+                                 d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
+                      d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
 
 
 class _State:
@@ -274,19 +297,18 @@ class _State:
             which = None  # most triangles: all at once costs less than gather and scatter
         f = self.f if which is None else self.f[which]
         q0, q1, q2 = (np.take(self.p, f[:, i], axis=1) for i in range(3))
-        e0, e1, e2 = q1 - q0, q2 - q1, q0 - q2
-        l0, l1, l2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)
-        d0, d1, d2 = -_dot(e0, e2), -_dot(e0, e1), -_dot(e1, e2)
+        self._store(which, *_shape_of(_geometry(q0, q1, q2)))
+
+    def _store(self, which, l0, l1, l2, d0, d1, d2):
+        """:meth:`_faces` of triangles ``which`` (all if None) from :func:`_shape_of` of their corners in order."""
         # |e0 x e2|^2 = |e0|^2 |e2|^2 - (e0 . e2)^2 (Lagrange): no cross
         # product; the cancellation in slivers costs ~1e-16 / angle^2 relative.
         area2 = np.sqrt(np.maximum(l0 * l2 - d0 * d0, 0.0))
         a = np.maximum(area2, 1e-300)
-        big = np.maximum(np.maximum(d0 / np.sqrt(np.maximum(l0 * l2, 1e-300)),
-                                    d1 / np.sqrt(np.maximum(l0 * l1, 1e-300))),
-                         d2 / np.sqrt(np.maximum(l1 * l2, 1e-300)))
+        big = _big_of(l0, l1, l2, d0, d1, d2)
         if which is None:
             # Entry [t, i]: the cotangent opposite half-edge 3 t + i.
-            self.cot = np.empty((len(f), 3))
+            self.cot = np.empty((len(self.f), 3))
             which = slice(None)
         cot = self.cot
         cot[which, 0], cot[which, 1], cot[which, 2] = d2 / a, d0 / a, d1 / a
@@ -335,15 +357,20 @@ class _State:
         p, q, r = np.take(P, tp, axis=1), np.take(P, tq, axis=1), np.take(P, tr, axis=1)
         # The smallest of the six angles (largest cosine) must grow.
         old = np.maximum(self.big[t1], self.big[t2])
-        cos_new = _max_cos(p[:, :2 * k], q[:, :2 * k], r[:, :2 * k]).reshape(2, k).max(axis=0)
+        geo = _geometry(p, q, r)
+        # The new triangles' shape products (corners as stored below): their
+        # smallest angles now, their cotangents and areas once flipped.
+        shape = np.array(_shape_of(tuple(g[..., :2 * k] for g in geo)))  # (6, 2 k)
+        cos_new = _big_of(*shape).reshape(2, k).max(axis=0)
         # No fold, no zero area, no more lean from the surface than before.
-        lean = _lean(p, q, r, np.take(N, tp, axis=1) + np.take(N, tq, axis=1) + np.take(N, tr, axis=1)).reshape(4, k)
+        lean = _lean_of(geo, np.take(N, tp, axis=1) + np.take(N, tq, axis=1) + np.take(N, tr, axis=1)).reshape(4, k)
         lean_new, lean_old = np.minimum(lean[0], lean[1]), np.minimum(lean[2], lean[3])
         ok = (cos_new < old - 1e-12) & (lean_new >= np.minimum(lean_old, tol.IMPROVE_LEAN)) & (lean_new > 0)
         if not ok.any():
             return 0, np.zeros(0, np.int64)
         # The leans of the new triangles (corners as they are stored below).
         lean_t1, lean_t2 = lean[0][ok], lean[1][ok]
+        shape_t1, shape_t2 = shape[:, :k][:, ok], shape[:, k:][:, ok]
         h, h2, a, b, c, d, new, t1, t2 = (x[ok] for x in (h, h2, a, b, c, d, new, t1, t2))
         gain = old[ok] - cos_new[ok]
         # An independent set: each triangle goes to its best flip; a flip is
@@ -384,7 +411,7 @@ class _State:
         f[t1] = np.stack([a, d, c], axis=1)
         f[t2] = np.stack([b, c, d], axis=1)
         self._replace(edge_keys(a, b, nv), new)
-        self._faces(np.concatenate([t1, t2]))
+        self._store(np.concatenate([t1, t2]), *np.concatenate([shape_t1[:, take], shape_t2[:, take]], axis=1))
         return len(h), dirty
 
     def _exists(self, new):
@@ -513,11 +540,25 @@ class _State:
         # the whole mesh (no move kept in any round).
         redo = np.arange(len(ft))
         lean = np.empty(len(ft))
+        # The shape products of each touched triangle as it is now (rows
+        # redone with the lean): the triangles' cotangents, angles and
+        # areas at the end without gathering their corners again.  Where
+        # most triangles are touched all are computed again at the end
+        # instead (no scatter of rows).
+        every = 2 * len(touched) > len(f)
+        shape = None
         while True:
             fr = ft[redo]
             now = [np.take(P, fr[:, i], axis=1) for i in range(3)]
             ref = sum(np.take(N, fr[:, i], axis=1) for i in range(3))
-            lean[redo] = _lean(*now, ref)
+            geo = _geometry(*now)
+            lean[redo] = _lean_of(geo, ref)
+            if every:
+                pass
+            elif shape is None:
+                shape = np.array(_shape_of(geo))
+            else:
+                shape[:, redo] = _shape_of(geo)
             back = ft[(lean < bound) | (lean <= 0)].ravel()
             back = back[moved[back]]
             if len(back) == 0:
@@ -531,7 +572,11 @@ class _State:
             moved[back] = False
             undone += len(back)
             redo = np.flatnonzero(_any_corner(was, ft))
-        self._faces(touched)  # the triangles at the vertices that moved (and may be back)
+        # The triangles at the vertices that moved (and may be back).
+        if every:
+            self._faces()
+        else:
+            self._store(touched, *shape)
         self.lean[touched] = lean  # each as it is now (recomputed after every move back)
         self.has_lean[touched] = True
         # A vertex whose move was undone (by Newton's checks or a fold)
