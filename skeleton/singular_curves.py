@@ -1421,7 +1421,15 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
                 # A piece shorter than a few such radii is all ends on the
                 # box (a curve across a thin box): the tube would fill it.
                 length = float(np.linalg.norm(np.diff(curves.points[c.vertices], axis=0), axis=1).sum()) / step
-                if rc > tol.CURVE_CROSSING_RADIUS and length >= tol.CURVE_CROSSING_MIN_LENGTH * rc:
+                # Nor on a piece that bends back within the wide tube's
+                # reach of itself (a small loop where a plane nearly
+                # tangent to a sphere cuts it): there the wide tube
+                # swallowed the lens between the loop's sheets whole, with
+                # no rail on it, and it was left out of the mesh.
+                if (rc > tol.CURVE_CROSSING_RADIUS and length >= tol.CURVE_CROSSING_MIN_LENGTH * rc
+                        and _room(curves.points[c.vertices] / step, c.closed,
+                                  min(max(rc, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX)
+                                  + tol.CURVE_TUBE_GROW)):
                     v_wide[c.vertices] = True
                     need[c.vertices] = rc
             continue
@@ -1447,6 +1455,27 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float) -> CurveSet:
     curves.wide = wide
     curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
     return curves
+
+
+def _room(p: np.ndarray, closed: bool, reach: float) -> bool:
+    """Whether a piece's polyline ``p`` (in cells) stays ``2 reach + 2`` cells (max norm) from its own far stretches.
+
+    Two vertices are of far stretches when the way between them along the
+    piece is more than ``CREASE_LOOP_DETOUR`` times their distance (the two
+    sides of a loop: pi/2 across a circle).  Two tubes of that reach round
+    them would meet and fill what lies between.
+    """
+    gap = 2.0 * reach + 2.0
+    pairs = cKDTree(p).query_pairs(gap, p=np.inf, output_type="ndarray")
+    if len(pairs) == 0:
+        return True
+    q = np.vstack([p, p[:1]]) if closed else p
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+    way = np.abs(s[pairs[:, 0]] - s[pairs[:, 1]])
+    if closed:
+        way = np.minimum(way, s[-1] - way)
+    d = np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
+    return not bool((way > tol.CREASE_LOOP_DETOUR * d).any())
 
 
 def crossing_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:
