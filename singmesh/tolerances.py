@@ -686,6 +686,11 @@ CURVE_CROSSING_MIN_VERTICES = 4
 #: ... and only on a piece at least this many times that reach long (a
 #: shorter one is all ends on the box).
 CURVE_CROSSING_MIN_LENGTH = 4.0
+#: A piece whose wide tube has no room (its far stretches closer than two
+#: such tubes: a small loop where a plane nearly tangent to a sphere cuts
+#: it) raises the fine level by up to this many levels: a loop 12 cells
+#: across at 8 degrees needs two.
+CURVE_CRAMPED_MAX_RAISE = 2
 
 #: A rail with both ends on one face of the box at most this many cells
 #: apart is a stub of a half-sheet's trace that ran along the face
