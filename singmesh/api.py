@@ -234,6 +234,16 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         curve_gap_asked = (curve_gap, fine_level)
     else:
         curve_gap_asked = None
+    # A small loop of a double curve whose sheets cross at a small angle
+    # has no room for the wide tube those sheets need (it would hold the
+    # lens between them whole): finer, its loop is more cells across while
+    # the tube's reach in cells stays.
+    if curves.cramped > 1.0:
+        more = min(int(np.ceil(np.log2(curves.cramped))), tol.CURVE_CRAMPED_MAX_RAISE)
+        if min(fine_level + more, tol.MAX_LEVEL) > raised:
+            raised = min(fine_level + more, tol.MAX_LEVEL)
+            gap_asked = None
+            curve_gap_asked = (None, fine_level)
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -291,6 +301,9 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             if gap_asked[0] < 1:
                 why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
                         "are creases 0 apart)")
+        elif curve_gap_asked is not None and curve_gap_asked[0] is None:
+            why = (f"a small loop of a double curve at fine {1 << curve_gap_asked[1]} (its sheets cross at a "
+                   "small angle and their tube would fill it)")
         elif curve_gap_asked is not None:
             why = f"singular curves {curve_gap_asked[0]:.3g} fine cells apart at fine {1 << curve_gap_asked[1]}"
         else:

@@ -704,6 +704,11 @@ CURVE_CROSSING_MIN_LENGTH = 4.0
 #: wide 10 cells, the other branch of their curve 12 cells away; triangles
 #: from a rail on the box's face 13 cells out to both curves).
 CURVE_WIDE_APART = 2 * CURVE_TUBE_GROW + 1.0
+#: A piece whose wide tube has no room (its far stretches closer than two
+#: such tubes: a small loop where a plane nearly tangent to a sphere cuts
+#: it) raises the fine level by up to this many levels: a loop 12 cells
+#: across at 8 degrees needs two.
+CURVE_CRAMPED_MAX_RAISE = 2
 
 #: A rail with both ends on one face of the box at most this many cells
 #: apart is a stub of a half-sheet's trace that ran along the face

@@ -132,6 +132,11 @@ class CurveSet:
     wide: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
     #: ... and the tube's radius (cells) along those edges.
     wide_radius: float = 0.0
+    #: How many times wider than the gap between its own far stretches the
+    #: wide tube of a piece would be (1: every wide tube fits).  Such a
+    #: piece (a small loop whose sheets cross at a small angle) gets the
+    #: usual tube, and the lattice is made finer for it (``mesh``).
+    cramped: float = 1.0
 
     def __len__(self) -> int:
         return len(self.pieces)
@@ -1408,6 +1413,7 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float, cell: np.ndarr
         d = np.abs(curves.points[:, None, :] - specials[None]).max(axis=2).min(axis=1)
         near_special = d <= tol.CURVE_BALL_GROW * step
     apart = None  # distance (cells) from each vertex to the other curves, when needed
+    cramped = 1.0
     for c in curves.pieces:
         # A piece as a whole: its median (where a cusp degenerates at a
         # special point, the balls around it widen the tube).  The tacnode
@@ -1422,15 +1428,30 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float, cell: np.ndarr
             away = c.vertices[~near_special[c.vertices]]
             if len(away) >= tol.CURVE_CROSSING_MIN_VERTICES:
                 rc = float(np.median(cross[away]))
-                # A piece shorter than a few such radii is all ends on the
-                # box (a curve across a thin box): the tube would fill it.
+                # An open piece shorter than a few such radii is all ends
+                # on the box (a curve across a thin box): the tube would
+                # fill it.
                 length = float(np.linalg.norm(np.diff(curves.points[c.vertices], axis=0), axis=1).sum()) / step
-                if rc > tol.CURVE_CROSSING_RADIUS and length >= tol.CURVE_CROSSING_MIN_LENGTH * rc:
+                if rc > tol.CURVE_CROSSING_RADIUS and (c.closed or length >= tol.CURVE_CROSSING_MIN_LENGTH * rc):
                     if apart is None:
                         apart = _other_curve_distance(curves, np.full(3, step) if cell is None else cell)
-                    # Not where the wide tube would take in another curve
+                    # Nor on a piece that bends back within twice the wide
+                    # tube's reach (max norm, as _tube_leaves grows it) of
+                    # itself, a small loop where a plane nearly tangent to
+                    # a sphere cuts it: the wide tube swallowed the lens
+                    # between the loop's sheets whole, with no rail on it,
+                    # and it was left out of the mesh.  Such a piece gets
+                    # the usual tube, and a finer lattice (``cramped``).
+                    tube_reach = (min(max(rc, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX)
+                                  - tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW + 0.5)
+                    room = 2.0 * tube_reach + 1.0
+                    gap = _far_gap(curves.points[c.vertices] / (np.full(3, step) if cell is None else cell),
+                                   c.closed, room)
+                    if gap < room:
+                        cramped = max(cramped, room / max(gap, 1.0))
+                    # Nor where the wide tube would take in another curve
                     # (CURVE_WIDE_APART): then the usual tube, as a whole.
-                    if apart[c.vertices].min() > rc + tol.CURVE_WIDE_APART:
+                    elif apart[c.vertices].min() > rc + tol.CURVE_WIDE_APART:
                         v_wide[c.vertices] = True
                         need[c.vertices] = rc
             continue
@@ -1454,6 +1475,7 @@ def _tube_widths(surface: Surface, curves: CurveSet, step: float, cell: np.ndarr
     wide = v_wide[curves.edges].all(axis=1)
     radius = float(np.max(need[curves.edges[wide]], initial=0.0))
     curves.wide = wide
+    curves.cramped = cramped
     curves.wide_radius = min(max(radius, tol.CURVE_TANGENT_RADIUS), tol.CURVE_TANGENT_MAX) if wide.any() else 0.0
     return curves
 
@@ -1478,6 +1500,28 @@ def _other_curve_distance(curves: CurveSet, cell: np.ndarray) -> np.ndarray:
             break
         out[mine] = cKDTree(curves.points[~mine] / cell).query(curves.points[mine] / cell, p=np.inf)[0]
     return out
+
+
+def _far_gap(p: np.ndarray, closed: bool, within: float) -> float:
+    """The smallest distance (max norm, cells) between far stretches of a piece's polyline ``p`` (in cells).
+
+    Two vertices are of far stretches when the way between them along the
+    piece is more than ``CREASE_LOOP_DETOUR`` times their distance (the two
+    sides of a loop: pi/2 across a circle).  Only pairs closer than
+    ``within`` are looked at: ``inf`` when there are none.
+    """
+    pairs = cKDTree(p).query_pairs(within, p=np.inf, output_type="ndarray")
+    if len(pairs) == 0:
+        return float("inf")
+    q = np.vstack([p, p[:1]]) if closed else p
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+    way = np.abs(s[pairs[:, 0]] - s[pairs[:, 1]])
+    if closed:
+        way = np.minimum(way, s[-1] - way)
+    far = way > tol.CREASE_LOOP_DETOUR * np.linalg.norm(p[pairs[:, 0]] - p[pairs[:, 1]], axis=1)
+    if not far.any():
+        return float("inf")
+    return float(np.abs(p[pairs[far, 0]] - p[pairs[far, 1]]).max(axis=1).min())
 
 
 def crossing_reach(surface: Surface, points: np.ndarray, tangents: np.ndarray, step: float) -> np.ndarray:
