@@ -257,7 +257,10 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # Where a root of a sum of squares in F vanishes on the surface (a
     # cone's apex written with sqrt), F is not differentiable: such points
     # are meshed as singular points, with a star.
-    tips = tip_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    # (Such zeros along a curve, the edge of a half-plane where F touches
+    # 0, are not points: said as a curve of singular points is.)
+    tips, tip_curve = tip_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    overflow = overflow or tip_curve
     if tips and avoid is not None:
         d = cKDTree(avoid).query(np.array([t.point for t in tips]))[0]
         tips = [t for t, far in zip(tips, d > tol.CURVE_AVOID * float(cell.max())) if far]
@@ -456,6 +459,15 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
+    # Where F is of one sign and touches 0 (sqrt(y^2 + z^2) - z on a
+    # half-plane: a sheet of singular points, and a curve of tips at its
+    # edge), the one line saying so is the whole answer.
+    if len(faces) == 0 and overflow and not surf.is_polynomial:
+        touch = _why_empty(surf, b)
+        if "only touches 0" in touch:
+            m.stats["touches_zero"] = touch[len("empty mesh: "):]
+            warnings.warn(touch, EmptyMeshWarning, stacklevel=3)
+            return m
     for note in m.singular_point_warnings() + m.curve_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
     # Closed across its cuspidal creases (star superquadrics with p = 2/3

@@ -410,7 +410,7 @@ class Mesh:
 
     def curve_warnings(self) -> list[str]:
         """A curve of singular points found in the box but not traced (so not meshed right): one line, or none."""
-        if not self.stats.get("untraced_curve"):
+        if not self.stats.get("untraced_curve") or self.stats.get("touches_zero"):
             return []
         return ["F has a curve of singular points in the box that could not be traced; "
                 "near it the mesh is not right"]
@@ -471,7 +471,10 @@ class Mesh:
             out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "
                        "type has half-sheets (the mesh is not right there)")
         if len(self.faces) == 0:
-            if self.stats.get("untraced_curve") or any(c.half_sheets for c in self.singular_curves):
+            if self.stats.get("touches_zero"):
+                # (F of one sign touching 0 along a sheet of singular points)
+                out.append(f"no triangle: {self.stats['touches_zero']}")
+            elif self.stats.get("untraced_curve") or any(c.half_sheets for c in self.singular_curves):
                 out.append(UNRESOLVED_EMPTY)
             elif self.singularities or self.singular_curves:
                 out.append("no triangle: in this box the real surface is only isolated point(s) and line(s)")

@@ -309,6 +309,13 @@ SPLIT_CHUNK = 256
 CURVE_SPAN = 8
 CURVE_SAMPLES = 9
 
+#: A clump of candidate boxes CURVE_SPAN or more across in two directions
+#: that fills at least this part of the rectangle of its two largest
+#: extents may be a sheet of singular points (F touching 0 along a
+#: surface); a curve's clump, a few boxes thick, fills about thickness /
+#: extent of it, under this once CURVE_SPAN long (see singular._sheets).
+SHEET_FILL = 0.25
+
 #: A sample of such a clump is on the curve when Newton (across the clump,
 #: which converges only linearly on a curve of cusps) gets the relative
 #: residual below this next to its box.  An isolated A5 four boxes away
