@@ -85,11 +85,22 @@ def check_box(box) -> np.ndarray:
 
 
 def check_defined(surf: Surface, box: np.ndarray) -> None:
-    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
+    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``),
+    or 0 / 0 along the zeros of a divisor in it (``sin(x) / x``)."""
     if surf.undefined_everywhere(box):
         where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
         raise SurfaceError(f"F = {surf} is undefined everywhere in the box {where} "
                            "(e.g. sqrt or log of a negative number)")
+    removable = getattr(surf, "removable_singularity", lambda box: None)(box)
+    if removable is not None:
+        # Its bounds are infinite on every box meeting the divisor's zeros:
+        # they would all go to the fine level, with NaN lattice values, and
+        # the mesh would have a gap along them (or worse, off the lattice).
+        d, p = removable
+        raise SurfaceError(f"F = {surf} is 0/0 where {d} = 0 in the box (e.g. at ({p[0]:.6g}, {p[1]:.6g}, "
+                           f"{p[2]:.6g})): a removable singularity, F's value there is a limit, which singmesh "
+                           "does not take; write F without that division, or use a box that does not meet "
+                           f"{d} = 0")
 
 
 def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,

@@ -727,6 +727,23 @@ TAYLOR_ORDER = 8
 #: anyway); a root is then kept where |F| is at rounding level.
 ELEMENTARY_ROOT_PIECE = 1e-9
 
+#: A removable singularity of a non-polynomial F (sin(x) / x at x = 0:
+#: ElementarySurface.removable_singularity) is read at points of the
+#: divisor's zeros found by this many Newton steps from a grid, with F
+#: evaluated this fraction of the box to either side: values within
+#: REMOVABLE_JUMP of F's scale of each other there are a limit (a pole's
+#: are ~1 / REMOVABLE_STEP apart).
+REMOVABLE_NEWTON_STEPS = 30
+REMOVABLE_STEP = 1e-6
+REMOVABLE_JUMP = 1e-3
+
+#: line_roots of a non-polynomial F gives up a piece with F undefined at
+#: an end (0 / 0) and unbounded on it once it is narrower than this part
+#: of its segment: a root closer than that to where F is 0 / 0 is lost (the
+#: mesh stops a cell short of such points anyway), and the 30 halvings to
+#: ELEMENTARY_ROOT_PIECE on every lattice line crossing them are not made.
+ELEMENTARY_UNDEFINED_PIECE = 2.0 ** -8
+
 #: A root polished by Newton is kept when |F| there is below this times
 #: the size of F's terms (a sign change across a pole, 1/x at 0, has
 #: |F| about its size and is no root).  A true root has |F| at rounding
