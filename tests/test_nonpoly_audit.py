@@ -162,3 +162,46 @@ def test_line_roots_beside_a_removable_singularity_finish(monkeypatch):
         got = x[row == i]
         for r in want:
             assert np.abs(got - r).min() <= 1e-12
+
+
+# ------------------------------------------------------------ 5: |u| for abs(u)
+@pytest.mark.parametrize("text, expected", [
+    ("|x| + |y| + |z| - 1", "Abs(x) + Abs(y) + Abs(z) - 1"),
+    ("|x - |y|| - z", "Abs(x - Abs(y)) - z"),
+    ("||x| - y| - z", "Abs(Abs(x) - y) - z"),
+    ("|x||y| - z", "Abs(x)*Abs(y) - z"),
+    ("2|x| - y", "2*Abs(x) - y"),
+    ("-|x|^3 + y", "-Abs(x)**3 + y"),
+    ("max(|x|, |y - 0.5|) - z", "Max(Abs(x), Abs(y - 1/2)) - z"),
+])
+def test_bars_are_abs(text, expected):
+    from singmesh.surface import Surface
+    import sympy
+
+    x, y, z = sympy.symbols("x y z", real=True)
+    want = sympy.sympify(expected, locals={"x": x, "y": y, "z": z})
+    assert sympy.simplify(Surface.parse(text).expr - want) == 0
+
+
+@pytest.mark.parametrize("text, column", [("|x", 1), ("x|", 2), ("x + |y - |z|", 5), ("||", 2), ("|x|y| - 1", 5)])
+def test_unclosed_bars_are_one_line(text, column):
+    with pytest.raises(singmesh.SurfaceError, match=r"'\|' is not closed") as e:
+        singmesh.mesh(text)
+    assert "\n" not in str(e.value) and e.value.column == column
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0, 0.0), (0.0123456789, -0.0345678901, 0.0234567891)])
+def test_octahedron_written_with_bars(shift):
+    a, b, c = shift
+    text = f"|x - ({a:.10f})| + |y - ({b:.10f})| + |z - ({c:.10f})| - 1"
+    m = singmesh.mesh(text, ((-1.5, 1.5),) * 3, coarse=16, fine=64)
+    V, box = m.vertices, np.array(((-1.5, 1.5),) * 3)
+    assert mc.boundary_edges_off_box(V, m.faces, box) == [] and mc.non_manifold_edges(m.faces) == []
+    assert mc.euler(V, m.faces) == 2 and mc.components(m.faces) == 1
+    f = np.abs(V[:, 0] - a) + np.abs(V[:, 1] - b) + np.abs(V[:, 2] - c) - 1
+    assert np.abs(f).max() <= 1e-10                  # |grad F| >= 1 everywhere
+    # its six corners are vertices
+    for k in range(3):
+        for s in (-1, 1):
+            corner = np.array(shift) + s * np.eye(3)[k]
+            assert np.linalg.norm(V - corner, axis=1).min() <= 1e-9
