@@ -489,6 +489,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         raise SurfaceError(cuspidal_crease_refusal(unfollowed))
     for note in m.crease_warnings():
         warnings.warn(note, CreaseWarning, stacklevel=3)
+    if not surf.is_polynomial and len(faces):
+        # Where the surface runs into a pole or out of F's domain (tan at
+        # pi/2, sqrt(1 - x^2 - y^2) at x^2 + y^2 = 1) the mesh ends up to a
+        # cell short of it, open there: said, not left for the user to find.
+        m.stats["open_at_domain_edge"] = _open_at_domain_edge(surf, m, float(cell.max()))
+        if m.stats["open_at_domain_edge"]:
+            warnings.warn(m.domain_edge_note(), SingularPointWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     elif len(faces) == 0 and (overflow or any(c.half_sheets for c in curve_list)):
@@ -496,6 +503,22 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _open_at_domain_edge(surf: Surface, m: Mesh, cell: float) -> list:
+    """[count, point, others] of the mesh's open edges inside the box next to where F is undefined or
+    unbounded (others: the open edges inside the box that are not), or [] where none is next to such places."""
+    edges, count = topology.edges_with_counts(m.faces)
+    one = edges[count == 1]
+    one = one[~(faces_of(m.vertices[one[:, 0]], m.box) & faces_of(m.vertices[one[:, 1]], m.box)).any(axis=1)]
+    if not len(one):
+        return []
+    mid = m.vertices[one].mean(axis=1)
+    near = surf.ends_near(mid, tol.DOMAIN_EDGE_REACH * cell)
+    if not near.any():
+        return []
+    p = mid[near][np.lexsort(mid[near].T[::-1])][0]
+    return [int(near.sum()), p.tolist(), int((~near).sum())]
 
 
 def _signs_resolved(surface: Surface, tree: Octree) -> bool:

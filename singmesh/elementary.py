@@ -662,6 +662,18 @@ class ElementarySurface(Surface):
                 return str(node.base), p[0]
         return None
 
+    def ends_near(self, points, radius: float) -> np.ndarray:
+        """(k,) bool: F is undefined or unbounded somewhere within ``radius`` (max norm) of each point.
+
+        Interval bounds of F on the cube round each point: some argument
+        left its function's domain there (sqrt of a negative number), or a
+        bound is infinite (a pole).  Where the surface runs into such
+        places the mesh ends up to a cell short of them.
+        """
+        p = np.asarray(points, float).reshape(-1, 3)
+        r = interval_eval(self._graph, [self._f], p - radius, p + radius)
+        return r.clipped | ~(np.isfinite(r.lo[0]) & np.isfinite(r.hi[0]))
+
     def undefined_everywhere(self, box) -> bool:
         """Whether F is certainly undefined on the whole of ``box`` (3, 2).
 

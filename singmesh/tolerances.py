@@ -737,6 +737,13 @@ REMOVABLE_NEWTON_STEPS = 30
 REMOVABLE_STEP = 1e-6
 REMOVABLE_JUMP = 1e-3
 
+#: An open edge of a non-polynomial mesh inside the box is next to where
+#: the surface runs into a pole or out of F's domain (said in a note) when
+#: F is undefined or unbounded within this many fine cells of its middle:
+#: the mesh stops up to a cell short of such places, and the bounds of a
+#: cube of 2 cells round it see them.
+DOMAIN_EDGE_REACH = 2.0
+
 #: line_roots of a non-polynomial F gives up a piece with F undefined at
 #: an end (0 / 0) and unbounded on it once it is narrower than this part
 #: of its segment: a root closer than that to where F is 0 / 0 is lost (the

@@ -205,3 +205,38 @@ def test_octahedron_written_with_bars(shift):
         for s in (-1, 1):
             corner = np.array(shift) + s * np.eye(3)[k]
             assert np.linalg.norm(V - corner, axis=1).min() <= 1e-9
+
+
+# ------------------------------------------------------------ 4: the surface runs out of F's domain
+@pytest.mark.parametrize("rotated", [False, True])
+def test_end_at_the_domain_edge_is_said(rotated):
+    # sqrt(1 - u^2 - v^2) - w - 0.2 is defined for u^2 + v^2 <= 1 only; the
+    # surface meets that cylinder at w = -0.2 and the mesh stops up to a
+    # cell short of it, open there.  On main nothing was said.
+    if rotated:
+        (u, v, w), rot = _rotated(7)
+        text = f"sqrt(1 - {u}^2 - {v}^2) - {w} - 0.2"
+    else:
+        u, v, w, rot = "x", "y", "z", lambda x, y, z: np.stack([x, y, z])
+        text = "sqrt(1-x^2-y^2)-z-0.2"
+    box = np.array(((-1.5, 1.5),) * 3)
+    m, said = _mesh(text, box=box, coarse=16, fine=64)
+    V = m.vertices
+    assert np.isfinite(V).all() and len(m.faces)
+    a, b, c = rot(*V.T)
+    f = np.sqrt(1 - a * a - b * b) - c - 0.2
+    g = np.linalg.norm(np.stack([a, b], 1) / np.sqrt(np.maximum(1 - a * a - b * b, 1e-300))[:, None], axis=1)
+    assert np.nanmax(np.abs(f) / np.hypot(g, 1.0)) <= 1e-9
+    open_edges = mc.boundary_edges_off_box(V, m.faces, box)
+    assert open_edges and mc.non_manifold_edges(m.faces) == []
+    notes = [n for n in said if "runs into a pole of F or out of its domain" in n]
+    assert len(notes) == 1 and notes[0] in m.notes()
+    assert f"open along {len(open_edges)} edge(s)" in notes[0]
+    # every open edge inside the box is next to the domain's edge: within
+    # two fine cells of u^2 + v^2 = 1
+    mid = V[np.array(open_edges)].mean(axis=1)
+    a, b, _ = rot(*mid.T)
+    assert np.abs(np.hypot(a, b) - 1).max() <= 2 * 3 / 64 * np.sqrt(3)
+    p = _named_point(notes[0])
+    a, b, _ = rot(*p[:, None])
+    assert abs(np.hypot(a[0], b[0]) - 1) <= 2 * 3 / 64 * np.sqrt(3)
