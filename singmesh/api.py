@@ -91,7 +91,7 @@ def check_defined(surf: Surface, box: np.ndarray) -> None:
         where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
         raise SurfaceError(f"F = {surf} is undefined everywhere in the box {where} "
                            "(e.g. sqrt or log of a negative number)")
-    removable = getattr(surf, "removable_singularity", lambda box: None)(box)
+    removable = surf.removable_singularity(box)
     if removable is not None:
         # Its bounds are infinite on every box meeting the divisor's zeros:
         # they would all go to the fine level, with NaN lattice values, and
