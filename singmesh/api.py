@@ -85,11 +85,22 @@ def check_box(box) -> np.ndarray:
 
 
 def check_defined(surf: Surface, box: np.ndarray) -> None:
-    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``)."""
+    """SurfaceError if F is certainly undefined on the whole box (``sqrt(-1 - x^2)``),
+    or 0 / 0 along the zeros of a divisor in it (``sin(x) / x``)."""
     if surf.undefined_everywhere(box):
         where = "[" + ", ".join(f"{lo:g}..{hi:g}" for lo, hi in box) + "]"
         raise SurfaceError(f"F = {surf} is undefined everywhere in the box {where} "
                            "(e.g. sqrt or log of a negative number)")
+    removable = surf.removable_singularity(box)
+    if removable is not None:
+        # Its bounds are infinite on every box meeting the divisor's zeros:
+        # they would all go to the fine level, with NaN lattice values, and
+        # the mesh would have a gap along them (or worse, off the lattice).
+        d, p = removable
+        raise SurfaceError(f"F = {surf} is 0/0 where {d} = 0 in the box (e.g. at ({p[0]:.6g}, {p[1]:.6g}, "
+                           f"{p[2]:.6g})): a removable singularity, F's value there is a limit, which singmesh "
+                           "does not take; write F without that division, or use a box that does not meet "
+                           f"{d} = 0")
 
 
 def mesh(surface, box=DEFAULT_BOX, *, coarse: int = 32, fine: int = 256, improve: bool = True,
@@ -267,7 +278,10 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # Where a root of a sum of squares in F vanishes on the surface (a
     # cone's apex written with sqrt), F is not differentiable: such points
     # are meshed as singular points, with a star.
-    tips = tip_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    # (Such zeros along a curve, the edge of a half-plane where F touches
+    # 0, are not points: said as a curve of singular points is.)
+    tips, tip_curve = tip_points(surf, b, level=min(fine_level, tol.SINGULAR_LEVEL))
+    overflow = overflow or tip_curve
     if tips and avoid is not None:
         d = cKDTree(avoid).query(np.array([t.point for t in tips]))[0]
         tips = [t for t, far in zip(tips, d > tol.CURVE_AVOID * float(cell.max())) if far]
@@ -469,6 +483,15 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             pass
     # Nothing is dropped silently: a point with branches that is not a
     # vertex, or whose fans differ from its branches, is said aloud.
+    # Where F is of one sign and touches 0 (sqrt(y^2 + z^2) - z on a
+    # half-plane: a sheet of singular points, and a curve of tips at its
+    # edge), the one line saying so is the whole answer.
+    if len(faces) == 0 and overflow and not surf.is_polynomial:
+        touch = _why_empty(surf, b)
+        if "only touches 0" in touch:
+            m.stats["touches_zero"] = touch[len("empty mesh: "):]
+            warnings.warn(touch, EmptyMeshWarning, stacklevel=3)
+            return m
     for note in m.singular_point_warnings() + m.curve_warnings():
         warnings.warn(note, SingularPointWarning, stacklevel=3)
     # Closed across its cuspidal creases (star superquadrics with p = 2/3
@@ -479,6 +502,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         raise SurfaceError(cuspidal_crease_refusal(unfollowed))
     for note in m.crease_warnings():
         warnings.warn(note, CreaseWarning, stacklevel=3)
+    if not surf.is_polynomial and len(faces):
+        # Where the surface runs into a pole or out of F's domain (tan at
+        # pi/2, sqrt(1 - x^2 - y^2) at x^2 + y^2 = 1) the mesh ends up to a
+        # cell short of it, open there: said, not left for the user to find.
+        m.stats["open_at_domain_edge"] = _open_at_domain_edge(surf, m, float(cell.max()))
+        if m.stats["open_at_domain_edge"]:
+            warnings.warn(m.domain_edge_note(), SingularPointWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
         warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
     elif len(faces) == 0 and (overflow or any(c.half_sheets for c in curve_list)):
@@ -486,6 +516,22 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
         warnings.warn(f"empty mesh: {UNRESOLVED_EMPTY[len('no triangle: '):]}", EmptyMeshWarning, stacklevel=3)
     return m
+
+
+def _open_at_domain_edge(surf: Surface, m: Mesh, cell: float) -> list:
+    """[count, point, others] of the mesh's open edges inside the box next to where F is undefined or
+    unbounded (others: the open edges inside the box that are not), or [] where none is next to such places."""
+    edges, count = topology.edges_with_counts(m.faces)
+    one = edges[count == 1]
+    one = one[~(faces_of(m.vertices[one[:, 0]], m.box) & faces_of(m.vertices[one[:, 1]], m.box)).any(axis=1)]
+    if not len(one):
+        return []
+    mid = m.vertices[one].mean(axis=1)
+    near = surf.ends_near(mid, tol.DOMAIN_EDGE_REACH * cell)
+    if not near.any():
+        return []
+    p = mid[near][np.lexsort(mid[near].T[::-1])][0]
+    return [int(near.sum()), p.tolist(), int((~near).sum())]
 
 
 def _signs_resolved(surface: Surface, tree: Octree) -> bool:

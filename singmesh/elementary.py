@@ -605,6 +605,75 @@ class ElementarySurface(Surface):
             return None
         return _Kink(self, "pole line", n, d, None, (), "pole")
 
+    def removable_singularity(self, box):
+        """Where F is 0 / 0 along the zeros of a denominator in ``box`` with a finite limit: (divisor, point) or None.
+
+        sin(x) / x at x = 0: F has a limit there (1), but its interval
+        bounds on every box meeting x = 0 are infinite, so such boxes are
+        never simple, the whole of x = 0 in the box goes to the fine
+        level, and the lattice values there are NaN.  A divisor ``d`` (the
+        base of a negative power) counts when, at every point of d = 0
+        found by Newton from a 5^3 grid of the box, F a step
+        ``REMOVABLE_STEP`` of the box to either side is finite, the two
+        values agree to ``REMOVABLE_JUMP`` of F's scale (a pole, 1 / x,
+        has them of opposite signs and huge), and F's bounds on the box
+        of that step round it are unbounded (a limit the bounds see,
+        exp(-1 / x^2), is no trouble).  Rational F are meshed as N = 0,
+        their closure: None.
+        """
+        if polynomial_fraction(self.expr) is not None:
+            return None
+        box = np.asarray(box, float)
+        size = float(np.max(box[:, 1] - box[:, 0]))
+        s = np.linspace(0.0, 1.0, 5)
+        grid = box[:, 0] + np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3) * (box[:, 1] - box[:, 0])
+        seen = set()
+        for node in sympy.preorder_traversal(self.expr):
+            if not (isinstance(node, sympy.Pow) and node.base.free_symbols and node.exp.is_negative):
+                continue
+            if node.base in seen:
+                continue
+            seen.add(node.base)
+            g = Graph()
+            d = g.from_sympy(node.base)
+            grad = [g.diff(d, a) for a in range(3)]
+            p = grid.copy()
+            for _ in range(tol.REMOVABLE_NEWTON_STEPS):
+                v, *dv = point_eval(g, [d] + grad, p)
+                dv = np.stack(dv, 1)
+                with np.errstate(all="ignore"):
+                    p = p - (v / np.einsum("ij,ij->i", dv, dv))[:, None] * dv
+            v, *dv = point_eval(g, [d] + grad, p)
+            dv = np.stack(dv, 1)
+            n = np.linalg.norm(dv, axis=1)
+            ok = (np.isfinite(p).all(axis=1) & np.all((p >= box[:, 0]) & (p <= box[:, 1]), axis=1)
+                  & (np.abs(v) <= 1e-12 * np.maximum(n, 1e-300) * size) & (n > 0))
+            if ok.sum() < 3:
+                continue
+            p, normal = p[ok], dv[ok] / n[ok, None]
+            step = tol.REMOVABLE_STEP * size
+            fp, fm = self(p + step * normal), self(p - step * normal)
+            r = interval_eval(self._graph, [self._f], p - step, p + step)
+            with np.errstate(invalid="ignore"):
+                removable = (np.isfinite(fp) & np.isfinite(fm)
+                             & (np.abs(fp - fm) <= tol.REMOVABLE_JUMP * self.scale)
+                             & ~(np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])))
+            if removable.all():
+                return str(node.base), p[0]
+        return None
+
+    def ends_near(self, points, radius: float) -> np.ndarray:
+        """(k,) bool: F is undefined or unbounded somewhere within ``radius`` (max norm) of each point.
+
+        Interval bounds of F on the cube round each point: some argument
+        left its function's domain there (sqrt of a negative number), or a
+        bound is infinite (a pole).  Where the surface runs into such
+        places the mesh ends up to a cell short of them.
+        """
+        p = np.asarray(points, float).reshape(-1, 3)
+        r = interval_eval(self._graph, [self._f], p - radius, p + radius)
+        return r.clipped | ~(np.isfinite(r.lo[0]) & np.isfinite(r.hi[0]))
+
     def undefined_everywhere(self, box) -> bool:
         """Whether F is certainly undefined on the whole of ``box`` (3, 2).
 
@@ -744,6 +813,15 @@ class ElementarySurface(Surface):
             # doubling the pieces at every step.  It holds no root we could
             # place.
             hopeless = ~np.isfinite(fv).reshape(3, k).any(axis=0)
+            # So is, once narrower than ELEMENTARY_UNDEFINED_PIECE of the
+            # segment, a piece with F undefined at an end (0 / 0: sin(x) / x
+            # at x = 0) and unbounded both ways on it: its half next to that
+            # end is unbounded too, down to the smallest width, on every
+            # lattice line crossing x = 0.  (Beside a pole, 1 / x + 3, one
+            # bound is finite once the piece is one-sided, and decides.)
+            hopeless |= ((np.isnan(fv[:k]) | np.isnan(fv[k:2 * k])) & ~np.isfinite(flo[split])
+                         & ~np.isfinite(fhi[split])
+                         & (b - a <= tol.ELEMENTARY_UNDEFINED_PIECE * np.abs(s1 - s0)[row]))
             # (The absolute floor: where F's terms are all zero, as on a line
             # lying in x / y = 0, its bounds are the outward rounding alone,
             # a few 1e-300, and the piece would be halved to the end.)

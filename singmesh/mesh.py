@@ -410,7 +410,7 @@ class Mesh:
 
     def curve_warnings(self) -> list[str]:
         """A curve of singular points found in the box but not traced (so not meshed right): one line, or none."""
-        if not self.stats.get("untraced_curve"):
+        if not self.stats.get("untraced_curve") or self.stats.get("touches_zero"):
             return []
         return ["F has a curve of singular points in the box that could not be traced; "
                 "near it the mesh is not right"]
@@ -452,9 +452,23 @@ class Mesh:
 
         return one[~(faces(self.vertices[one[:, 0]]) & faces(self.vertices[one[:, 1]])).any(axis=1)]
 
+    def domain_edge_note(self) -> str:
+        """One line on the open edges where the surface runs into a pole or out of F's domain, or ""."""
+        edge = self.stats.get("open_at_domain_edge")
+        if not edge:
+            return ""
+        n, p, others = edge
+        return (f"the surface runs into a pole of F or out of its domain (sqrt or log of a negative number, "
+                f"0/0): the mesh ends up to a cell short of there, open along {n} edge(s) inside the box "
+                f"(e.g. at ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}))"
+                + (f"; {others} other open edge(s) inside the box are not next to such places: the mesh is "
+                   "not right there" if others else ""))
+
     def notes(self) -> list[str]:
         """What the user must know about this mesh beyond the counts."""
         out = self.singular_point_warnings() + self.curve_warnings() + self.crease_warnings()
+        if self.stats.get("open_at_domain_edge"):
+            out.append(self.domain_edge_note())
         if self.stats.get("speck_triangles"):
             out.append(f"two sheets of F = 0 come closer than a cell: {self.stats['speck_triangles']} triangles "
                        "of closed specks between them were dropped (no extremum of F inside); there the mesh "
@@ -471,7 +485,10 @@ class Mesh:
             out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "
                        "type has half-sheets (the mesh is not right there)")
         if len(self.faces) == 0:
-            if self.stats.get("untraced_curve") or any(c.half_sheets for c in self.singular_curves):
+            if self.stats.get("touches_zero"):
+                # (F of one sign touching 0 along a sheet of singular points)
+                out.append(f"no triangle: {self.stats['touches_zero']}")
+            elif self.stats.get("untraced_curve") or any(c.half_sheets for c in self.singular_curves):
                 out.append(UNRESOLVED_EMPTY)
             elif self.singularities or self.singular_curves:
                 out.append("no triangle: in this box the real surface is only isolated point(s) and line(s)")

@@ -395,6 +395,17 @@ class Surface(abc.ABC):
         """
         return False
 
+    def removable_singularity(self, box):
+        """(divisor, point) where F is 0 / 0 with a limit along a divisor's zeros in ``box``, or None.
+
+        None for a polynomial (no divisor); see ElementarySurface.
+        """
+        return None
+
+    def ends_near(self, points, radius: float) -> np.ndarray:
+        """(k,) bool: F is undefined or unbounded within ``radius`` of each point (False: a polynomial)."""
+        return np.zeros(len(np.asarray(points).reshape(-1, 3)), bool)
+
     @abc.abstractmethod
     def enclose(self, box) -> np.ndarray:
         """``data`` of the one box ``box`` (3, 2): N = 1."""

@@ -22,6 +22,11 @@ An equation text is a sequence of statements separated by ``;``::
 * Functions: ``sqrt exp log ln sin cos tan asin acos atan sinh cosh tanh
   abs min max`` and their sympy spellings; constants ``pi`` and ``e`` (as
   in SingSurf; a definition of ``e`` takes precedence).
+* ``|u|`` is ``abs(u)``, as in SingSurf and the common notation.  A ``|``
+  where an operand is expected opens a group; inside one, a ``|`` after
+  an operand closes the innermost group, so ``|x - |y||`` is
+  ``abs(x - abs(y))`` and ``|x||y|`` is ``abs(x) abs(y)``; outside any
+  group a ``|`` after an operand opens one (``2|x|``).
 
 Errors raise :class:`singmesh.SurfaceError` with the line and column of
 the offending character in the text as given (``line`` and ``column``
@@ -57,7 +62,7 @@ _SUPERSCRIPT = re.compile("([%s]?)([%s]+)" % ("".join(_SUPERSCRIPT_SIGNS), "".jo
 
 _NUMBER = re.compile(r"(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
-_OPERATORS = ("**", "^", "+", "-", "*", "/", "(", ")", ",", ";", "=")
+_OPERATORS = ("**", "^", "+", "-", "*", "/", "(", ")", ",", ";", "=", "|")
 
 #: Functions a text may call, by the names it may use.
 FUNCTIONS = {
@@ -213,6 +218,7 @@ class Parser:
     i: int = 0
     uses: dict = field(default_factory=dict)
     depth: int = 0
+    bars: int = 0  # |...| groups open
 
     # -- helpers
     def peek(self) -> Token:
@@ -262,8 +268,11 @@ class Parser:
                 if t.text == "/" and rhs == 0:
                     raise self.error(t, "division by zero")
                 factors.append(rhs if t.text == "*" else 1 / rhs)
-            elif t.kind in ("number", "name") or (t.kind == "op" and t.text == "("):
-                factors.append(self.unary())  # juxtaposition: 2 x y, x(y+1), (a)(b)
+            elif (t.kind in ("number", "name") or (t.kind == "op" and t.text == "(")
+                  or (t.kind == "op" and t.text == "|" and not self.bars)):
+                # juxtaposition: 2 x y, x(y+1), (a)(b), 2|x| (inside |...|
+                # a bar after an operand closes the group instead)
+                factors.append(self.unary())
             else:
                 return sympy.Mul(*factors) if len(factors) > 1 else factors[0]
 
@@ -310,9 +319,27 @@ class Parser:
             e = self.sum()
             self.expect(")")
             return e
+        if t.kind == "op" and t.text == "|":
+            return self.bar_group(t)
         if t.kind == "end":
             raise self.error(t, "syntax error: unexpected end of the expression")
         raise self.error(t, f"syntax error: unexpected {_describe(t)}")
+
+    def bar_group(self, t: Token) -> sympy.Expr:
+        """``|u|`` after its opening bar ``t``: abs(u)."""
+        # (A bar right after an opening one opens a group inside it:
+        # ||x| - y| is abs(abs(x) - y).)
+        if self.peek().kind == "end":
+            raise self.error(t, "syntax error: this '|' is not closed (nothing follows it)")
+        self.bars += 1
+        e = self.sum()
+        self.bars -= 1
+        close = self.peek()
+        if close.kind != "op" or close.text != "|":
+            raise self.error(t, f"syntax error: this '|' is not closed (found {_describe(close)} where "
+                                "the closing '|' of |...| should be)")
+        self.take()
+        return sympy.Abs(e)
 
     def name(self, t: Token) -> sympy.Expr:
         name = t.text

@@ -317,6 +317,13 @@ SPLIT_CHUNK = 256
 CURVE_SPAN = 8
 CURVE_SAMPLES = 9
 
+#: A clump of candidate boxes CURVE_SPAN or more across in two directions
+#: that fills at least this part of the rectangle of its two largest
+#: extents may be a sheet of singular points (F touching 0 along a
+#: surface); a curve's clump, a few boxes thick, fills about thickness /
+#: extent of it, under this once CURVE_SPAN long (see singular._sheets).
+SHEET_FILL = 0.25
+
 #: A sample of such a clump is on the curve when Newton (across the clump,
 #: which converges only linearly on a curve of cusps) gets the relative
 #: residual below this next to its box.  An isolated A5 four boxes away
@@ -742,6 +749,30 @@ TAYLOR_ORDER = 8
 #: below ROOT_CLUSTER, so two roots left in one piece are one cluster
 #: anyway); a root is then kept where |F| is at rounding level.
 ELEMENTARY_ROOT_PIECE = 1e-9
+
+#: A removable singularity of a non-polynomial F (sin(x) / x at x = 0:
+#: ElementarySurface.removable_singularity) is read at points of the
+#: divisor's zeros found by this many Newton steps from a grid, with F
+#: evaluated this fraction of the box to either side: values within
+#: REMOVABLE_JUMP of F's scale of each other there are a limit (a pole's
+#: are ~1 / REMOVABLE_STEP apart).
+REMOVABLE_NEWTON_STEPS = 30
+REMOVABLE_STEP = 1e-6
+REMOVABLE_JUMP = 1e-3
+
+#: An open edge of a non-polynomial mesh inside the box is next to where
+#: the surface runs into a pole or out of F's domain (said in a note) when
+#: F is undefined or unbounded within this many fine cells of its middle:
+#: the mesh stops up to a cell short of such places, and the bounds of a
+#: cube of 2 cells round it see them.
+DOMAIN_EDGE_REACH = 2.0
+
+#: line_roots of a non-polynomial F gives up a piece with F undefined at
+#: an end (0 / 0) and unbounded on it once it is narrower than this part
+#: of its segment: a root closer than that to where F is 0 / 0 is lost (the
+#: mesh stops a cell short of such points anyway), and the 30 halvings to
+#: ELEMENTARY_ROOT_PIECE on every lattice line crossing them are not made.
+ELEMENTARY_UNDEFINED_PIECE = 2.0 ** -8
 
 #: A root polished by Newton is kept when |F| there is below this times
 #: the size of F's terms (a sign change across a pole, 1/x at 0, has

@@ -283,7 +283,14 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
     # of F beside the curve (an A2 of one factor a cell from the other)
     # has its boxes there too.
     on_curve = np.zeros(len(lo), bool)
-    on_curve[~near] = _curve_chains(surface, lo[~near], hi[~near], box)
+    # A sheet of singular points (F touching 0 along a surface without
+    # changing sign: sqrt(y^2 + z^2) - z on its half-plane) makes a clump
+    # as wide as it is long: Newton from each of its boxes cost seconds and
+    # finds no point.  Its boxes are not points either.
+    far = np.nonzero(~near)[0]
+    on_curve[far] = _sheets(surface, lo[far], hi[far], box)
+    rest = far[~on_curve[far]]
+    on_curve[rest] = _curve_chains(surface, lo[rest], hi[rest], box)
     curve = bool(on_curve.any())
     lo, hi, near = lo[~on_curve], hi[~on_curve], near[~on_curve]
     if len(lo) == 0:
@@ -465,6 +472,68 @@ def _clumps(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _principal(points: np.ndarray) -> np.ndarray:
     """The unit direction along which ``points`` spread most."""
     return np.linalg.svd(points - points.mean(axis=0), full_matrices=False)[2][0]
+
+
+def _least(points: np.ndarray) -> np.ndarray:
+    """The unit direction along which ``points`` spread least."""
+    d = points - points.mean(axis=0)
+    return np.linalg.eigh(d.T @ d)[1][:, 0]
+
+
+def _sheets(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Which candidate boxes lie on a sheet (a surface) of singular points.
+
+    A clump of boxes (as :func:`_curve_chains`) at least ``CURVE_SPAN``
+    boxes across in two directions and holding at least ``SHEET_FILL`` of
+    the product of its two largest extents is a sheet when Newton from
+    ``CURVE_SAMPLES`` of its boxes reaches singular points next to them
+    that spread ``CURVE_SPAN / 2`` boxes across in two directions (a
+    curve's points lie along one).  A curve's clump, a few boxes thick,
+    fills a vanishing part of that product once it is that long.
+    """
+    out = np.zeros(len(lo), bool)
+    if len(lo) < tol.CURVE_SPAN ** 2 * tol.SHEET_FILL:
+        return out
+    cells = np.rint((lo - box[:, 0]) / (hi - lo)).astype(np.int64)
+    label, _ = _clumps(cells)
+    n = np.bincount(label)
+    first = np.full((len(n), 3), np.iinfo(np.int64).max)
+    last = np.full((len(n), 3), np.iinfo(np.int64).min)
+    np.minimum.at(first, label, cells)
+    np.maximum.at(last, label, cells)
+    ext = np.sort(last - first + 1, axis=1)
+    wide = np.nonzero((ext[:, 1] >= tol.CURVE_SPAN) & (n >= tol.SHEET_FILL * ext[:, 2] * ext[:, 1]))[0]
+    if len(wide) == 0:
+        return out
+    h = float(np.max(hi[0] - lo[0]))
+    limit = max(accept_residual(surface), tol.CURVE_RESIDUAL)
+    for lab in wide.tolist():
+        mine = np.nonzero(label == lab)[0]
+        centres = (lo[mine] + hi[mine]) / 2
+        picks = np.linspace(0, len(mine) - 1, tol.CURVE_SAMPLES).astype(int)
+        starts = centres[picks]
+        # Newton along the clump's normal where each start is (the least
+        # principal direction of the boxes within three of it): in the
+        # sheet F is flat, and a free step drifts along it (F ~ y^2 / 2z
+        # falls as z grows).
+        normal = np.array([_least(centres[np.abs(centres - c).max(axis=1) <= 3.0 * h])
+                           for c in starts])
+        x = starts.copy()
+        for _ in range(60):
+            f, g, hess = surface.jet(x)
+            r = np.concatenate([f[:, None], g], axis=1)
+            jn = np.einsum("kij,kj->ki", np.concatenate([g[:, None, :], hess], axis=1), normal)
+            t = np.einsum("ki,ki->k", jn, r) / np.maximum(np.einsum("ki,ki->k", jn, jn), 1e-300)
+            x = x - np.clip(t, -h, h)[:, None] * normal
+        good = np.isfinite(x).all(axis=1) & (np.abs(x - starts).max(axis=1) <= 2 * h)
+        good[good] = residual(surface, x[good]) <= limit
+        ends = x[good]
+        if len(ends) < 3:
+            continue
+        # The spread of the ends across their first principal direction.
+        sv = np.linalg.svd(ends - ends.mean(axis=0), compute_uv=False)
+        out[mine] = sv[1] >= 0.5 * tol.CURVE_SPAN * h / np.sqrt(len(ends))
+    return out
 
 
 def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -> np.ndarray:

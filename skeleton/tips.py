@@ -30,28 +30,37 @@ from singmesh.surface import Surface, boxes_where
 
 from .classify import SingularityType
 from .points import SingularPoint
+from .singular import _clumps
 
 #: The name tips are classified by.
 TIP = "non-differentiable"
 
 
-def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
+def tip_points(surface: Surface, box, level: int = 8) -> tuple[list[SingularPoint], bool]:
     """The points of F = 0 in ``box`` where a root of a sum of squares in F vanishes.
 
     Returns
     -------
-    list of SingularPoint, sorted by coordinates, each classified ``TIP``
-    (its note names the root).
+    points : list of SingularPoint, sorted by coordinates, each classified
+        ``TIP`` (its note names the root)
+    not_isolated : bool
+        True when such zeros lie along a curve (the edge y = z = 0 of the
+        half-plane where sqrt(y^2 + z^2) - z touches 0): they are not
+        points, and are not in ``points``.
     """
     box = np.asarray(box, dtype=float)
     size = box[:, 1] - box[:, 0]
     found, names = [], []
+    not_isolated = False
     for system in surface.tip_systems():
         x = _kinked_zeros(surface, system, box, level)
+        chain = _chains(x, box, level)
+        not_isolated |= bool(chain.any())
+        x = x[~chain]
         found.append(x)
         names += [system.name] * len(x)
     if not found or not sum(len(f) for f in found):
-        return []
+        return [], not_isolated
     x = np.concatenate(found)
     order = np.lexsort(x.T[::-1])
     x, names = x[order], [names[i] for i in order]
@@ -68,7 +77,22 @@ def tip_points(surface: Surface, box, level: int = 8) -> list[SingularPoint]:
                                note=f"F is not differentiable here (a {name} vanishes): not an ADE point")
         out.append(SingularPoint(point=p, residual=float(abs(surface(p[None])[0])), hessian_rank=0,
                                  signature=(0, 0, 3), classification=kind))
-    return out
+    return out, not_isolated
+
+
+def _chains(x: np.ndarray, box: np.ndarray, level: int) -> np.ndarray:
+    """(k,) bool: the zeros ``x`` in a clump of boxes of ``level`` at least ``CURVE_SPAN`` long.
+
+    Gauss-Newton from the candidate boxes along a curve of such zeros ends
+    all along it, a few per box: a chain, not isolated points (as the
+    singular point search reads its candidate clumps).
+    """
+    if len(x) < tol.CURVE_SPAN:
+        return np.zeros(len(x), bool)
+    h = (box[:, 1] - box[:, 0]) / (1 << level)
+    cells = np.floor((x - box[:, 0]) / h).astype(np.int64)
+    label, span = _clumps(cells)
+    return span[label] >= tol.CURVE_SPAN
 
 
 def _kinked_zeros(surface: Surface, system, box: np.ndarray, level: int) -> np.ndarray:
