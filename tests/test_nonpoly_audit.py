@@ -16,16 +16,7 @@ import singmesh
 from singmesh.elementary import ElementarySurface
 
 import meshcheck as mc
-
-
-def _rotated(seed):
-    """Three rotated, shifted coordinates as text (15-digit floats) and as numpy code."""
-    q = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
-    shift = np.array([0.0123456789, -0.0345678901, 0.0234567891])
-    rows = ["(" + " + ".join(f"({q[i, j]:.15f})*{v}" for j, v in enumerate("xyz")) + f" + ({shift[i]:.10f}))"
-            for i in range(3)]
-    qr = np.array([[float(f"{q[i, j]:.15f}") for j in range(3)] for i in range(3)])
-    return rows, lambda x, y, z: qr @ np.stack([x, y, z]) + shift[:, None]
+from test_nonpoly import _rotated
 
 
 class _Count:
