@@ -1212,6 +1212,9 @@ def test_double_curve_by_a_box_edge_open(kind, depth, angle, steep, bend):
 OPEN_CASES = [
     (1, 270, "the loop of f1 = f2 = 0 has a cusp at the cubic cone's apex, where the double curve through it "
              "crosses: the loop's half-sheets are also that curve's, and their rails snap to it (open edges)"),
+    (1, 494, "5 close vertex pairs, 3 open and 3 non-manifold edges next to the double curve: clean "
+             "before eda528b (points beside traced curves found by Newton there), broken by it; found "
+             "by fuzz seed 1 on 9d06651, not fixed yet"),
     (3, 350, "a trace lost beside a non-simple point: an edge of four triangles off the curve"),
     (3, 474, "a trace lost next to a crossing of curves: edges of six triangles"),
     (3, 566, "a short arc of the double curve read as A12/A13 points: a vertex off the surface"),
