@@ -233,7 +233,13 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     asked = fine_level - raises
     gap = crease_gap(creases, b, fine_level)
     raised = _fine_for_creases(gap, fine_level)
-    gap_asked = (gap, fine_level) if raised > fine_level else None  # for a refusal's message
+    # Why fine was raised, for a refusal's message.
+    raised_for = None
+    if raised > fine_level:
+        raised_for = f"creases {gap:.3g} fine cells apart at fine {1 << fine_level}"
+        if gap < 1:
+            raised_for += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
+                           "are creases 0 apart)")
     # Two singular curves (or two stretches of one) closer than two tubes'
     # width share one tube, and the sheets between them have no rail there
     # (the two branches of a hyperbola 10 cells apart: fuzz s2-126): the
@@ -241,20 +247,15 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     curve_gap = crease_gap(curves, b, fine_level)
     if _fine_for_curves(curve_gap, fine_level) > raised:
         raised = _fine_for_curves(curve_gap, fine_level)
-        gap_asked = None
-        curve_gap_asked = (curve_gap, fine_level)
-    else:
-        curve_gap_asked = None
+        raised_for = f"singular curves {curve_gap:.3g} fine cells apart at fine {1 << fine_level}"
     # A small loop of a double curve whose sheets cross at a small angle
     # has no room for the wide tube those sheets need (it would hold the
     # lens between them whole): finer, its loop is more cells across while
     # the tube's reach in cells stays.
-    if curves.cramped > 1.0:
-        more = min(int(np.ceil(np.log2(curves.cramped))), tol.CURVE_CRAMPED_MAX_RAISE)
-        if min(fine_level + more, tol.MAX_LEVEL) > raised:
-            raised = min(fine_level + more, tol.MAX_LEVEL)
-            gap_asked = None
-            curve_gap_asked = (None, fine_level)
+    if _fine_for_loops(curves.cramped, fine_level) > raised:
+        raised = _fine_for_loops(curves.cramped, fine_level)
+        raised_for = (f"a small loop of a double curve at fine {1 << fine_level} (its sheets cross at a small "
+                      "angle and their tube would fill it)")
     if raised > fine_level:
         gap *= 1 << (raised - fine_level)
         fine_level = raised
@@ -310,18 +311,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         if fine_level <= asked:
             raise
         # The user's coarse and fine were not what asked for the memory.
-        if gap_asked is not None:
-            why = f"creases {gap_asked[0]:.3g} fine cells apart at fine {1 << gap_asked[1]}"
-            if gap_asked[0] < 1:
-                why += (" (two kinks along one curve, as coplanar faces of the arguments of a Min or Max, "
-                        "are creases 0 apart)")
-        elif curve_gap_asked is not None and curve_gap_asked[0] is None:
-            why = (f"a small loop of a double curve at fine {1 << curve_gap_asked[1]} (its sheets cross at a "
-                   "small angle and their tube would fill it)")
-        elif curve_gap_asked is not None:
-            why = f"singular curves {curve_gap_asked[0]:.3g} fine cells apart at fine {1 << curve_gap_asked[1]}"
-        else:
-            why = "crease strips that failed on the coarser lattices"
+        why = raised_for or "crease strips that failed on the coarser lattices"
         raise MemoryBudgetError(f"{e}; fine was raised from {1 << asked} to {1 << fine_level} for {why}") from None
     centres = np.array([sp.point for sp in points]).reshape(-1, 3)
     expected = [getattr(sp.classification, "branches", None) for sp in points]
@@ -650,6 +640,17 @@ def _fine_for_creases(gap: float, fine_level: int) -> int:
         return fine_level
     more = int(np.ceil(np.log2(tol.CREASE_MIN_GAP / max(gap, 1e-300))))
     return min(fine_level + min(more, tol.CREASE_MAX_RAISE), tol.MAX_LEVEL)
+
+
+def _fine_for_loops(cramped: float, fine_level: int) -> int:
+    """The fine level at which a loop ``cramped`` times too small for its wide tube has room for it.
+
+    At most ``CURVE_CRAMPED_MAX_RAISE`` levels more, and ``MAX_LEVEL``.
+    """
+    if cramped <= 1.0:
+        return fine_level
+    more = int(np.ceil(np.log2(cramped)))
+    return min(fine_level + min(more, tol.CURVE_CRAMPED_MAX_RAISE), tol.MAX_LEVEL)
 
 
 def _fine_for_curves(gap: float, fine_level: int) -> int:
