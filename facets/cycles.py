@@ -130,3 +130,40 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     offsets = np.append(start, len(idx))
     return Cycles(box=node_box[idx[start]], offsets=offsets, events=nodes[idx] % n_events,
                   squares=out_square[idx], broken_boxes=broken)
+
+
+def lens_leaves(cycles: Cycles, level: np.ndarray, fine_level: int, on_box_edge: np.ndarray) -> np.ndarray:
+    """Leaves above the fine level holding a lens cut off by an edge of the box.
+
+    A piece of surface that meets one edge of a leaf twice and no other
+    edge is a cycle of two events, which bounds no polygon.  Inside the
+    box its two links are edges of the neighbours' polygons across the
+    two faces, and the mesh only cuts the bulge short.  On an edge of the
+    box there are no such neighbours: the whole piece (a sliver cut off by
+    the box's edge) is dropped without a word.  Such a leaf is to be
+    split: its children see the sliver on more edges.
+
+    Parameters
+    ----------
+    cycles : Cycles
+    level : (N,) int64
+        Level of every leaf; box ids from ``N`` on (stars, tubes) are not leaves.
+    fine_level : int
+    on_box_edge : (E,) bool
+        Per event: whether it lies on an edge of the box (two coordinates
+        at the box's bounds).
+
+    Returns
+    -------
+    (K,) int64
+        Sorted leaf indices.
+    """
+    count = np.diff(cycles.offsets)
+    short = np.flatnonzero(count < 3)
+    # All of a short cycle's events on the box's edges (np.minimum.reduceat
+    # over the cycles' runs; the runs of short cycles are 1 or 2 long).
+    all_on = np.minimum.reduceat(on_box_edge[cycles.events].astype(np.int8), cycles.offsets[:-1])[short] \
+        if len(short) else np.zeros(0, np.int8)
+    box = cycles.box[short][all_on.astype(bool)]
+    box = box[box < len(level)]
+    return np.unique(box[level[box] < fine_level])

@@ -16,7 +16,7 @@ from singmesh.boxes.faces import face_links, leaf_sides, rail_links
 from singmesh.boxes.octree import Octree, refine_stars, subdivide
 from singmesh.boxes.sizing import CurvatureSizing, sizing_levels
 from singmesh.facets.assemble import assemble
-from singmesh.facets.cycles import box_links, find_cycles
+from singmesh.facets.cycles import box_links, find_cycles, lens_leaves
 from singmesh.facets.polygons import add_strips, curve_key0, facet_polygons, point_key
 from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, part_branches, short_stars, shrink_cubes, star_cubes
@@ -202,8 +202,10 @@ def _one_blas_thread():
 
 
 def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
-          sizing=("uniform", None, None, None), max_memory=None, raises: int = 0) -> Mesh:
-    """:func:`mesh` itself (``raises``: the times ``fine`` was doubled for creases after a first try)."""
+          sizing=("uniform", None, None, None), max_memory=None, raises: int = 0,
+          lenses: np.ndarray | None = None) -> Mesh:
+    """:func:`mesh` itself (``raises``: the times ``fine`` was doubled for creases after a first try;
+    ``lenses``: (k, 2, 3) regions split to the fine level, found by a first try)."""
     t0 = time.perf_counter()
     if max_memory is not None:
         parse_size(max_memory)  # a bad value is said before the work
@@ -300,6 +302,8 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # of them, go to the fine level.
     cubes = np.array([[sp.point - cell, sp.point + cell] for sp in points]).reshape(-1, 2, 3)
     keep = np.concatenate([cubes, tube_regions(b, fine_level, curves)]) if len(curves.points) else cubes
+    if lenses is not None:
+        keep = np.concatenate([keep, lenses])
     refine = None
     if levels is not None:
         side = float((b[:, 1] - b[:, 0]).max())
@@ -359,6 +363,17 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         if not few or attempt == tol.STAR_RETRIES:
             break
         cubes = shrink_cubes(first, cubes, centres, few)
+    # A sliver of surface cut off by an edge of the box in a coarse leaf
+    # has a cycle of two events and no polygon: it would be dropped without
+    # a word (fuzz s4-26, 25 cells long).  Those leaves are split to the
+    # fine level, once, where the sliver meets more edges.
+    lens = lens_leaves(cycles, tree.level, fine_level, topology.on_box_edge(events.point, b, tol.STAR_ON_BOX))
+    if len(lens) and lenses is None:
+        lo = tree.lattice_to_space(tree.corner[lens])
+        hi = tree.lattice_to_space(tree.corner[lens] + tree.size[lens, None])
+        inset = tol.LENS_INSET * cell
+        return _mesh(surface, box, coarse, fine, improve, params, sizing, max_memory, raises,
+                     np.stack([lo + inset, hi - inset], axis=1))
 
     offsets, keys, pts, apex, branches, splits = facet_polygons(surf, tree, events, links, cycles, stars, points, tube_id,
                                                                  expected=expected)
@@ -455,7 +470,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             and fine_level < tol.MAX_LEVEL and _strips_failed(m)):
         try:
             return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
-                         raises + 1)
+                         raises + 1, lenses)
         except MemoryBudgetError:
             pass
     # A surface thinner than a cell along a cuspidal edge (x^2 = z^3 - 5 z^4:
@@ -468,7 +483,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             and _signs_resolved(surf, tree)):
         try:
             return _mesh(surface, box, coarse, 1 << (fine_level + 1), improve, params, sizing, max_memory,
-                         raises + 1)
+                         raises + 1, lenses)
         except MemoryBudgetError:
             pass
     # Nothing is dropped silently: a point with branches that is not a

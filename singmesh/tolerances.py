@@ -143,6 +143,11 @@ NODE_ON_OTHER = 1e-9
 #: no cone over its boundary (caught by STAR_RETRIES).
 STAR_REACH = 1 / 8
 
+#: Inset (fine cells) of a leaf's box when it is given as a region to split
+#: (a leaf holding a lens with a cycle of two events): the region then
+#: meets that leaf and its children, not the neighbours sharing its faces.
+LENS_INSET = 0.25
+
 #: Times a star with fewer link cycles than its point's branches is halved
 #: and meshed again (its cube was larger than the cone it must hold).
 STAR_RETRIES = 2

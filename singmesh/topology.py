@@ -38,5 +38,15 @@ def triangle_angles(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def on_box_boundary(points: np.ndarray, box: np.ndarray, rel: float = 1e-12) -> np.ndarray:
     """Whether points lie on a face of the box (to ``rel`` of its size)."""
+    return _bounds_met(points, box, rel) >= 1
+
+
+def on_box_edge(points: np.ndarray, box: np.ndarray, rel: float = 1e-12) -> np.ndarray:
+    """Whether points lie on an edge of the box (two faces, to ``rel`` of its size)."""
+    return _bounds_met(points, box, rel) >= 2
+
+
+def _bounds_met(points: np.ndarray, box: np.ndarray, rel: float) -> np.ndarray:
+    """Per point, how many of the box's faces it lies on (0 to 3)."""
     scale = rel * (box[:, 1] - box[:, 0])
-    return (np.abs(points - box[:, 0]) <= scale).any(axis=1) | (np.abs(points - box[:, 1]) <= scale).any(axis=1)
+    return ((np.abs(points - box[:, 0]) <= scale) | (np.abs(points - box[:, 1]) <= scale)).sum(axis=1)

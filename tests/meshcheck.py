@@ -180,3 +180,69 @@ def boundary_t_junctions(vertices, faces, rel=1e-9) -> int:
                 count += 1
                 break
     return count
+
+
+def distance_to_mesh(points, vertices, faces, return_triangle: bool = False, exact: bool = True):
+    """Distance of each point to the nearest triangle (not to vertices).
+
+    With ``return_triangle`` also the index of that triangle (-1 for none).
+    With ``exact=False`` only an upper bound: the distance to the nearest
+    of the 8 triangles whose centroids are nearest (enough to show that a
+    point is near the mesh; measure the others again exactly).
+    """
+    from scipy.spatial import cKDTree
+
+    p = np.asarray(points, float).reshape(-1, 3)
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, np.int64)
+    out = np.full(len(p), np.inf)
+    nearest = np.full(len(p), -1)
+    if len(f) == 0:
+        return (out, nearest) if return_triangle else out
+    tri = v[f]
+    tree = cKDTree(tri.mean(axis=1))
+    k = min(8, len(f))
+    _, idx = tree.query(p, k=k)
+    idx = idx.reshape(len(p), k)
+    owner = np.repeat(np.arange(len(p)), k)
+    _closest(out, nearest, owner, idx.ravel(), p, tri)
+    # The nearest triangle has its centroid within (distance found) +
+    # (longest edge) of the point.
+    longest = float(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max())
+    if exact:
+        cand = tree.query_ball_point(p, out + longest)
+        owner = np.repeat(np.arange(len(p)), [len(c) for c in cand])
+        which = np.fromiter((t for c in cand for t in c), np.int64, count=len(owner))
+        _closest(out, nearest, owner, which, p, tri)
+    return (out, nearest) if return_triangle else out
+
+
+def _closest(out, nearest, owner, which, p, tri) -> None:
+    """Lower ``out`` / set ``nearest`` by the (point, triangle) pairs given."""
+    d = _point_triangles(p[owner], tri[which])
+    np.minimum.at(out, owner, d)
+    best = d == out[owner]
+    nearest[owner[best]] = which[best]
+
+
+def _point_triangles(q, tri) -> np.ndarray:
+    """Distance of each point of ``q`` (T, 3) to its triangle of ``tri`` (T, 3, 3)."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    n = np.cross(b - a, c - a)
+    nn = np.linalg.norm(n, axis=1)
+    flat = nn <= 1e-300
+    n = n / np.where(flat, 1.0, nn)[:, None]
+    h = ((q - a) * n).sum(axis=1)
+    foot = q - h[:, None] * n
+    # Inside when the foot is on the inner side of all three edges.
+    inside = ~flat
+    for x, y in ((a, b), (b, c), (c, a)):
+        inside &= (np.cross(y - x, foot - x) * n).sum(axis=1) >= 0
+
+    def seg(x, y):
+        d = y - x
+        t = np.clip(((q - x) * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-300), 0.0, 1.0)
+        return np.linalg.norm(q - x - t[:, None] * d, axis=1)
+
+    edge = np.minimum(np.minimum(seg(a, b), seg(b, c)), seg(c, a))
+    return np.where(inside, np.abs(h), edge)
