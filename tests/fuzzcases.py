@@ -24,6 +24,10 @@ use the mesher's report, its Bernstein code or its singular points.
   no open edge inside the box, no edge with more than two triangles.  For
   a product f g the curve f = g = 0 is singular: there an edge may have
   four triangles (two sheets crossing), never one or three;
+* no piece of the surface left out: roots of F on every second line of
+  the fine lattice (bisected sign changes) lie within ``UNCOVERED`` fine cells of a
+  triangle, or half the longest edge of the nearest triangle where the
+  mesh is coarse (a chord's sag);
 * a mesh with triangles exactly when F changes sign in the box: a dense
   grid plus random points decide "changes sign"; a mesh without that is
   checked again with points beside its vertices (a thin region the grid
@@ -58,6 +62,11 @@ BOXES = ("symmetric", "unit", "random")
 #: inside which the topology is not judged: the mesher's cone / star is
 #: built there, checked by the singular-point tests, not by this judge.
 NEAR_POINT = 0.05
+#: Distance (fine cells) from the mesh beyond which a root of F on a
+#: lattice line is a piece of surface left out (a sliver thinner than a
+#: cell may be cut short, nothing larger).
+UNCOVERED = 1.5
+
 #: Distance (fraction of the box) from the curve f = g = 0 of a product
 #: within which an edge may have four triangles.
 NEAR_CURVE = 0.02
@@ -489,6 +498,29 @@ def judge(case: Case, coarse: int = 8, fine: int = 64) -> Verdict:
         if not inside[used].all():
             fail("outside-box", f"{int((~inside[used]).sum())} vertices")
 
+    # Nothing left out: the roots of F on the fine lattice's lines.
+    if len(f):
+        # Every second line of the fine lattice: a piece left out that is
+        # two cells across or more meets one.
+        roots = lattice_roots(field_, box, fine // 2 + 1)
+        cell = size / fine
+
+        def off_mesh(pts, exact):
+            d, tri = mc.distance_to_mesh(pts, v, f, return_triangle=True, exact=exact)
+            t = v[f[tri]]
+            longest = np.linalg.norm(t - np.roll(t, 1, axis=1), axis=2).max(axis=1)
+            return d, (d > UNCOVERED * cell) & (d > 0.5 * longest)
+
+        # An upper bound first, exact distances where it is not near enough.
+        _, far = off_mesh(roots, exact=False)
+        if far.any():
+            roots = roots[far]
+            d, far = off_mesh(roots, exact=True)
+            if far.any():
+                i = int(np.argmax(np.where(far, d, -1)))
+                fail("uncovered", f"{int(far.sum())} lattice roots off the mesh, worst "
+                                  f"{d[i] / cell:.3g} cells at {np.round(roots[i], 4).tolist()}")
+
     # Empty exactly when F keeps its sign.
     pos, neg = sign_sample(field_, box)
     changes = pos and neg
@@ -558,6 +590,28 @@ def judge(case: Case, coarse: int = 8, fine: int = 64) -> Verdict:
                                  f"{np.round(mid[i], 4).tolist()}")
     status = "fail" if fails else ("clean" if len(f) else "empty")
     return Verdict(case.name, status, fails, "; ".join(details), seconds, len(f), len(sing), notes)
+
+
+def lattice_roots(field: Field, box, n: int, steps: int = 32) -> np.ndarray:
+    """Roots of F on the lines of an n^3 grid of the box: each sign change
+    between two grid points bisected ``steps`` times (one root per segment)."""
+    g = _grid(box, n)
+    vals = field.value(g.reshape(-1, 3)).reshape(g.shape[:3])
+    out = []
+    for ax in range(3):
+        a = np.moveaxis(g, ax, 0)
+        w = np.moveaxis(vals, ax, 0)
+        m = (w[:-1] * w[1:]) < 0
+        lo, hi, flo = a[:-1][m], a[1:][m], w[:-1][m]
+        for _ in range(steps):
+            mid = 0.5 * (lo + hi)
+            fm = field.value(mid)
+            same = fm * flo > 0
+            lo = np.where(same[:, None], mid, lo)
+            flo = np.where(same, fm, flo)
+            hi = np.where(same[:, None], hi, mid)
+        out.append(0.5 * (lo + hi))
+    return np.concatenate(out)
 
 
 def _sign_change_near(field: Field, pts, radius, n: int = 400) -> np.ndarray:

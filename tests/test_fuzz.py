@@ -457,6 +457,12 @@ REGRESSIONS = [
     ("s3-925 lens round a cuspidal edge",
      "-2.9223338669653*z^4 + 0.609126391864046*x*y*z^2 + 0.747860898702115*x^3*y + 0.575562523538086*z^3"
      " - 1.2068778495843*x^2", ((-1.0, 1.0), (-0.5, 0.5), (-2.0, 2.0)), 8, 64),
+    # A sliver of the first factor cut off by the box's edge x = y = -0.5,
+    # 25 cells long, inside one coarse leaf: a link cycle of two events, no
+    # polygon, left out without a word (facets/cycles.py lens_leaves).
+    ("s4-26 sliver at an edge of the box",
+     "(1/3*y*z^2 - 2*y^2*z + 2*y^3 - 9/4*x*z^2 + 7/8*x + 5/7)"
+     "*(-3/8*x*z^2 + 1/3*x^2*z - 7*x^2*y - 5*x^2 + 2*z + 7*x + 8)", ((-0.5, 0.5), (-0.5, 0.5), (-2.0, 2.0)), 8, 64),
 ]
 
 
@@ -469,7 +475,28 @@ def test_fuzz_regression(name, text, box, coarse, fine):
         return
     case = fc.case_from_text(name, text, box)
     v = fc.judge(case, coarse, fine)
+    if name in UNCOVERED_OPEN:
+        # Right in the class it guards; the piece of surface left out is open.
+        assert set(v.failures) <= {"uncovered"}, f"{text} on {box}: {v.detail}"
+        assert v.failures, f"{name}: nothing left out any more: remove it from UNCOVERED_OPEN"
+        pytest.xfail(f"{UNCOVERED_OPEN[name]}: {v.detail}")
     assert v.status == "clean", f"{text} on {box}: {v.detail}"
+
+
+#: Regressions that the judge's check of pieces left out (``uncovered``:
+#: roots of F on lattice lines more than 1.5 cells from the mesh), added
+#: after them, finds wrong: right in the class each guards, open in this one.
+UNCOVERED_OPEN = {
+    "s1-354 a face trace between a curve's two ends":
+        "sheets of both factors 2 to 4.6 cells from the mesh beside the double curve near the face x = -1",
+    "s2-136 a sheet through a lattice line, another a cell away":
+        "a piece 2.3 cells across on the face z = 1 between two sheets about a cell apart",
+    "s2-136 permuted": "the same piece, on the face x = 1",
+    "s1-186 no strip triangle in a face":
+        "the plane's sheet up to 8.5 cells from the mesh beside the cubic's cuspidal and tacnode edges",
+    "s3-978 curve cutting a box edge": "the plane's sheet 2.8 cells from the mesh where the curve leaves by a box edge",
+    "s4-838 wide tube beside another curve": "both factors' sheets 2.5 cells from the mesh beside a wide tube",
+}
 
 
 #: Non-simple isolated points, each one singular point of F = 0 (where it is
@@ -1226,6 +1253,9 @@ OPEN_CASES = [
              "one level finer for them (CURVE_GAP_LEAST), where they are 9 cells apart and still share a "
              "tube: 45 edges of six triangles"),
     (4, 850, "non-manifold edges in a random box"),
+    (4, 16, "the y-axis is a curve of D6 points for y < 0 (x (z^2 + 3 x^4 / y): a plane and two sheets "
+            "tangent along the axis), read as D4: sheets left out up to 9 cells from the axis (found by the "
+            "judge's check of pieces left out)"),
 ]
 
 
