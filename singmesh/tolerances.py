@@ -560,7 +560,8 @@ CURVE_CLIP_BISECT = 50
 CURVE_CHECK_MILNOR = 6
 #: ... by tracing the locus from it both ways (half-box steps, at most
 #: CURVE_CHECK_STEPS): a curve when both ways leave the cube of
-#: CURVE_CHECK_REACH boxes around it.
+#: CURVE_CHECK_REACH boxes around it or take all the steps (a curve winding
+#: inside it), or one way comes back to it.
 CURVE_CHECK_REACH = 10.0
 CURVE_CHECK_STEPS = 80
 

@@ -390,11 +390,15 @@ def _points_in(surface: Surface, box: np.ndarray, lo: np.ndarray, hi: np.ndarray
             if by and kind.milnor is None:
                 regions.append((q, region))
                 continue
-            if kind.milnor is None and _on_curve(surface, q, cell, steps=(2, 4, 8)):
+            if kind.milnor is None and (_on_curve(surface, q, cell, steps=(2, 4, 8)) or _continues(surface, q, cell)):
                 # Non-simple: on a curve of singular points (its neighbours
                 # are singular too), or an isolated point of higher type
                 # (x^2 - y^6 - z^4 is singular to CURVE_RESIDUAL two boxes
                 # along y at level 8, not four; x^3 + y^7 + z^2 not eight).
+                # Straight steps miss an arc that turns within 8 boxes (an
+                # arc of a sextic double curve too short to be traced, a
+                # few cells from a traced one, where Newton from the boxes
+                # round that one ends: fuzz s1-494); tracing follows it.
                 curve = True
                 regions.append((q, 3.0 * cell))
                 continue
@@ -632,8 +636,8 @@ def _continues(surface: Surface, p: np.ndarray, cell: float) -> bool:
     The curve tracer (steps of half a box, shorter on tight turns, each
     vertex Newton-corrected to a curve vertex's residual) followed from
     ``p`` along a kernel direction, both ways: on a curve it leaves the
-    cube of ``CURVE_CHECK_REACH`` boxes around ``p`` (or comes round to
-    ``p``) both ways; from an isolated point of type A_k the residual
+    cube of ``CURVE_CHECK_REACH`` boxes around ``p`` or takes all its
+    ``CURVE_CHECK_STEPS`` both ways, or one way comes round to ``p``; from an isolated point of type A_k the residual
     grows as the k-th power of the distance and the trace is lost within
     a few boxes (an A12 of unit coefficients at 0.15, five boxes at level
     6 and under the cube's 0.08 at level 8 only from A20 on).  Unlike
@@ -648,9 +652,15 @@ def _continues(surface: Surface, p: np.ndarray, cell: float) -> bool:
     reach = tol.CURVE_CHECK_REACH * cell
     cube = np.stack([p - reach, p + reach], axis=1)
     for col in np.flatnonzero(np.abs(w) <= tol.CENTRE_RANK_RTOL * scale):
-        ways = [_trace_one_way(surface, cube, p, sign * v[:, col], 0.5 * cell, tol.CURVE_CHECK_STEPS)[1]
-                for sign in (1.0, -1.0)]
-        if all(how in ("box", "closed") for how in ways):
+        ways = []
+        for sign in (1.0, -1.0):
+            pts, how = _trace_one_way(surface, cube, p, sign * v[:, col], 0.5 * cell, tol.CURVE_CHECK_STEPS)
+            # All its steps taken without losing the locus: a curve that
+            # winds inside the cube (the branches of a sextic double curve
+            # looping within 10 boxes: fuzz s1-494), not an isolated point,
+            # whose trace is lost within a few boxes.
+            ways.append("steps" if how == "lost" and len(pts) >= tol.CURVE_CHECK_STEPS else how)
+        if "closed" in ways or all(how in ("box", "steps") for how in ways):
             return True
     return False
 
