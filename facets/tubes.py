@@ -808,9 +808,9 @@ def _no_excursions(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = Non
     reduced (each step straight back along the edge just walked cancels
     it) and every event snapped to the vertex of the reduced walk it was
     on.  Only for rails whose walk passes a vertex where curves meet (three
-    or more edges), and not where a cancelled stretch reaches a turn
-    (``turns``: round a pinch point a rail comes back along the curve)
-    or a curve's end.
+    or more edges); a step back from a turn (``turns``: round a pinch
+    point a rail comes back along the curve) or a curve's end is kept,
+    the rail's other excursions still cancelled.
     """
     snap = np.asarray(snap)
     if len(snap) < 3:
@@ -827,16 +827,22 @@ def _no_excursions(snap: np.ndarray, g: nx.Graph, turns: np.ndarray | None = Non
         at.append(len(walk) - 1)
     if not any(g.degree(v) >= 3 for v in walk):
         return snap
-    stack, depth, cancelled = [], [], []
+    stack, depth, cancelled = [], [], False
     for v in walk:
-        if len(stack) >= 2 and stack[-2] == v:
-            cancelled.append(stack.pop())
+        # A step back from a turn or a curve's end is the rail's own way
+        # round it (round a pinch point a rail comes back along the
+        # curve): kept, while an excursion elsewhere on the same rail is
+        # still cancelled (fuzz s4-850: a rail round the pinch point of
+        # f2's double line also went out past the triple point where f1
+        # crosses it and back, six triangles on those edges).
+        if len(stack) >= 2 and stack[-2] == v and not (g.degree(stack[-1]) <= 1
+                                                       or (turns is not None and turns[stack[-1]])):
+            stack.pop()
+            cancelled = True
         else:
             stack.append(v)
         depth.append(len(stack))
     if not cancelled:
-        return snap
-    if any(g.degree(v) <= 1 or (turns is not None and turns[v]) for v in cancelled):
         return snap
     # An event keeps the part of its stack that is never popped after it.
     lowest = np.minimum.accumulate(np.asarray(depth)[::-1])[::-1]
