@@ -482,7 +482,53 @@ def _side_signs(surface, tree, lines, line_of, pos):
     right[last] = both[len(pos):]
     inner = np.flatnonzero(same_next)
     right[inner] = left[inner + 1]
+    # Between two roots F has one sign only where it is continuous: across
+    # a pole (tan(2x) + 1.5 between its roots at x = -0.49 and 1.08, with
+    # the pole at pi/4 between) it changes sign without a zero, and the
+    # midpoint's sign may be that of the far side.  Both samples of such a
+    # root read +: a touching, no event, and the boxes on both sides of the
+    # line lost their cycles, far from the pole (tan(2x) + tan(2y) - z: 874
+    # open edges away from the poles on main).  Each root reads its own
+    # side instead, at a sample moved towards it until F is continuous
+    # between (also past an end of F's domain, where the midpoint is NaN).
+    prev_mid = (prev + pos) / 2
+    next_mid = np.empty_like(pos)
+    next_mid[last] = pos[last] + 0.5
+    next_mid[inner] = prev_mid[inner + 1]
+    for sample, out in ((prev_mid, left), (next_mid, right)):
+        moved, at = _towards_continuity(surface, tree, lines[line_of], pos, sample)
+        if len(moved):
+            out[moved] = _signs(surface, tree, lines[line_of[moved]], at)
     return left, right
+
+
+def _towards_continuity(surface, tree, rows, pos, sample):
+    """Samples (lattice positions on lines ``rows``) moved towards their roots ``pos`` until F is continuous
+    between: (which, new positions) of those moved, at most ``SIGN_SAMPLE_HALVINGS`` halvings each.
+
+    Then half-way again: the first sample with F continuous up to the root
+    may lie a rounding error beside the pole (1 / cos(2.1 x) + 2 between
+    its roots +-0.997 has the pole 0.748 three quarters of the way from
+    the midpoint 0), where F is 1e15 and zero relative to its terms; the
+    point half-way to the root is as far from the pole as from the root.
+    """
+    def gap(which, at):
+        p = tree.lattice_to_space(_line_xyz(rows[which], pos[which]))
+        q = tree.lattice_to_space(_line_xyz(rows[which], at))
+        return ~surface.continuous_on(np.minimum(p, q), np.maximum(p, q))
+
+    bad = np.flatnonzero(gap(np.arange(len(pos)), sample))
+    at = sample[bad].copy()
+    todo = np.arange(len(bad))
+    for _ in range(tol.SIGN_SAMPLE_HALVINGS):
+        if not len(todo):
+            break
+        at[todo] = pos[bad[todo]] + 0.5 * (at[todo] - pos[bad[todo]])
+        todo = todo[gap(bad[todo], at[todo])]
+    done = np.ones(len(bad), bool)
+    done[todo] = False
+    at[done] = pos[bad[done]] + 0.5 * (at[done] - pos[bad[done]])
+    return bad, at
 
 
 def _signs(surface, tree, lines_rows, pos, zeros: bool = False):

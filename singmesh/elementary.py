@@ -674,6 +674,22 @@ class ElementarySurface(Surface):
         r = interval_eval(self._graph, [self._f], p - radius, p + radius)
         return r.clipped | ~(np.isfinite(r.lo[0]) & np.isfinite(r.hi[0]))
 
+    def continuous_on(self, lo, hi) -> np.ndarray:
+        """(k,) bool: F is certainly defined and bounded on each closed box [lo, hi] (k, 3).
+
+        Interval bounds of F: finite, and no argument leaves its function's
+        domain.  Where False the box may hold a pole (tan at pi / 2, where
+        F jumps from +inf to -inf without a zero) or an end of F's domain.
+        """
+        lo = np.asarray(lo, float).reshape(-1, 3)
+        if getattr(self, "_limited", None) is None:
+            # (F without poles and defined everywhere, the gyroid: no bounds to read)
+            self._limited = self._poles or any(True for _ in _domain_conditions(self.expr))
+        if not self._limited or not len(lo):
+            return np.ones(len(lo), bool)
+        r = interval_eval(self._graph, [self._f], lo, np.asarray(hi, float).reshape(-1, 3))
+        return ~r.clipped & np.isfinite(r.lo[0]) & np.isfinite(r.hi[0])
+
     def undefined_everywhere(self, box) -> bool:
         """Whether F is certainly undefined on the whole of ``box`` (3, 2).
 

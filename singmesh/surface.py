@@ -406,6 +406,14 @@ class Surface(abc.ABC):
         """(k,) bool: F is undefined or unbounded within ``radius`` of each point (False: a polynomial)."""
         return np.zeros(len(np.asarray(points).reshape(-1, 3)), bool)
 
+    def continuous_on(self, lo, hi) -> np.ndarray:
+        """(k,) bool: F is certainly defined and bounded on each closed box [lo, hi] (k, 3).
+
+        True for a polynomial.  Where False, the box may hold a pole of F
+        or an end of its domain: F may change sign in it without a zero.
+        """
+        return np.ones(len(np.asarray(lo).reshape(-1, 3)), bool)
+
     @abc.abstractmethod
     def enclose(self, box) -> np.ndarray:
         """``data`` of the one box ``box`` (3, 2): N = 1."""

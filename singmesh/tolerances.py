@@ -109,6 +109,12 @@ NEWTON_STEP = 1e-15
 #: the point stays where it was: 2^-30 of a step is below any lattice cell.
 PROJECT_HALVINGS = 30
 
+#: A sign sample between two roots of a lattice line with a pole or an end
+#: of F's domain between them (boxes.edges._side_signs) is moved half-way
+#: towards its root until F is continuous between, at most this many
+#: times: 2^-40 of half a cell is at rounding level of the coordinates.
+SIGN_SAMPLE_HALVINGS = 40
+
 #: Sign samples between roots of a lattice line are asked whether F is
 #: zero to rounding there (Surface.is_zero) only where |F| is below this
 #: fraction of the largest sample: rounding noise is far below it.
