@@ -22,6 +22,7 @@ from singmesh.facets.records import curve_graph, curve_records
 from singmesh.facets.stars import group_stars, part_branches, short_stars, shrink_cubes, star_cubes
 from singmesh.facets.bubbles import lattice_specks, without_faces
 from singmesh.facets.coarsen import coarsen_crease_mesh
+from singmesh.facets.domain_edges import on_domain_end, reach_domain_edges
 from singmesh.facets.tubes import curve_samples, faces_of, tube_leaves, tube_regions, untraced_points
 from singmesh.facets.improve import improve_mesh
 from singmesh.skeleton.creases import crease_curves, crease_gap, merge_curve_sets
@@ -407,13 +408,27 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
             vertices, faces, vkeys, grad, curves, key0, point_key(np.arange(len(points))), b,
             tol.COARSEN_EDGE * coarse_cell, tol.COARSEN_REACH * coarse_cell)
         fixed = np.arange(key0, key0 + len(curves.points))
+    strips = 0
+    on_end = np.zeros(len(vertices), bool)
+    if not surf.is_polynomial and len(faces):
+        # Up to where the surface runs out of F's domain (sqrt(1 - x^2 - y^2)
+        # at x^2 + y^2 = 1), from the open edges a cell short of it.
+        n_old = len(vertices)
+        vertices, faces, source, strips = reach_domain_edges(vertices, faces, surf, b, float(cell.max()))
+        # (kept in place by improve, keyed below the singular points'; grad F is infinite on the
+        # domain's end, the normal of the vertex each came from stands in for it there)
+        vkeys = np.concatenate([vkeys, point_key(len(points) + np.arange(len(source)))])
+        on_end = np.arange(len(vertices)) >= n_old
+        if grad:
+            grad[0] = np.concatenate([grad[0], grad[0][source]])
     t_improve = time.perf_counter()
     improved = {}
     if improve:
         # The singular points' vertices stay, as do the curve and crease
         # vertices (the keys fixed).
         singular_vertex = np.isin(vkeys, point_key(np.arange(len(points))))
-        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex, np.isin(vkeys, fixed),
+        vertices, faces, improved = improve_mesh(vertices, faces, surf, b, singular_vertex,
+                                                 np.isin(vkeys, fixed) | on_end,
                                                  gradient=grad[0])
     t_improve = time.perf_counter() - t_improve
     # Where two axis skeletons meet (normal along an axis), for reference:
@@ -452,6 +467,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         # Distance (fine cells) of the two closest creases, where closer
         # than CREASE_MIN_GAP (then ``fine`` was raised for them), else None.
         "crease_gap": gap if np.isfinite(gap) else None,
+        "domain_edge_triangles": strips,
         "improve": improved,
         "improve_time": t_improve,
         "memory_estimate": budget.largest,
@@ -524,8 +540,9 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
 
 
 def _open_at_domain_edge(surf: Surface, m: Mesh, cell: float) -> list:
-    """[count, point, others] of the mesh's open edges inside the box next to where F is undefined or
-    unbounded (others: the open edges inside the box that are not), or [] where none is next to such places."""
+    """[count, point, others, short] of the mesh's open edges inside the box next to where F is undefined or
+    unbounded (others: the open edges inside the box that are not; short: those of count not ending on
+    an end of F's domain, facets.domain_edges), or [] where none is next to such places."""
     edges, count = topology.edges_with_counts(m.faces)
     one = edges[count == 1]
     one = one[~(faces_of(m.vertices[one[:, 0]], m.box) & faces_of(m.vertices[one[:, 1]], m.box)).any(axis=1)]
@@ -536,7 +553,12 @@ def _open_at_domain_edge(surf: Surface, m: Mesh, cell: float) -> list:
     if not near.any():
         return []
     p = mid[near][np.lexsort(mid[near].T[::-1])][0]
-    return [int(near.sum()), p.tolist(), int((~near).sum())]
+    # Those not ending on the domain's end (up to a cell short of it, or of a pole).
+    ends = np.zeros(len(m.vertices), bool)
+    at = np.unique(one[near])
+    ends[at] = on_domain_end(surf, m.vertices[at], float(np.max(m.box[:, 1] - m.box[:, 0])))
+    short = near & ~(ends[one[:, 0]] & ends[one[:, 1]])
+    return [int(near.sum()), p.tolist(), int((~near).sum()), int(short.sum())]
 
 
 def _signs_resolved(surface: Surface, tree: Octree) -> bool:

@@ -578,6 +578,25 @@ class ElementarySurface(Surface):
             self._root_systems = (tips, creases)
         return self._root_systems
 
+    def domain_edge_systems(self) -> list[CreaseSystem]:
+        """A root sqrt(u) or u^p (0 < p < 1) of F, u not a sum of squares nor |v| or v^2: where u = 0 on the
+        surface it ends, F finite there.  (G1, G2) = (F with the root replaced by 0, u) each."""
+        if getattr(self, "_domain_edge_systems", None) is None:
+            g, f = self._graph, self._f
+            plan = g.plan([f])
+            rfun_roots = {g.args[n][2] for n in plan if g.ops[n] == "rfun"}
+            out = []
+            for n in plan:
+                op, p = g.ops[n], g.params[n]
+                if n in rfun_roots or not (op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0)):
+                    continue
+                a = g.args[n][0]
+                if g._squares(a) or g.ops[a] == "abs" or (g.ops[a] == "powi" and g.params[a] == 2):
+                    continue
+                out.append(_Kink(self, "domain edge", g.substitute(f, n, g.zero), a, None, (), "pole"))
+            self._domain_edge_systems = out
+        return self._domain_edge_systems
+
     def _pole_line(self):
         """The curve where the surface runs into a pole of F = N / D, as a crease system (N, D), or None.
 

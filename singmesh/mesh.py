@@ -457,9 +457,11 @@ class Mesh:
         edge = self.stats.get("open_at_domain_edge")
         if not edge:
             return ""
-        n, p, others = edge
+        n, p, others, short = edge
+        where = ("there" if not short else "up to a cell short of there" if short == n else
+                 f"there, and up to a cell short of there along {short} of them")
         return (f"the surface runs into a pole of F or out of its domain (sqrt or log of a negative number, "
-                f"0/0): the mesh ends up to a cell short of there, open along {n} edge(s) inside the box "
+                f"0/0): the mesh ends {where}, open along {n} edge(s) inside the box "
                 f"(e.g. at ({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}))"
                 + (f"; {others} other open edge(s) inside the box are not next to such places: the mesh is "
                    "not right there" if others else ""))

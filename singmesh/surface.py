@@ -406,6 +406,11 @@ class Surface(abc.ABC):
         """(k,) bool: F is undefined or unbounded within ``radius`` of each point (False: a polynomial)."""
         return np.zeros(len(np.asarray(points).reshape(-1, 3)), bool)
 
+    def domain_edge_systems(self) -> list[CreaseSystem]:
+        """Where the surface may run out of F's domain with F finite there: (G1, G2) systems whose common
+        zeros hold those ends (none for a polynomial)."""
+        return []
+
     def continuous_on(self, lo, hi) -> np.ndarray:
         """(k,) bool: F is certainly defined and bounded on each closed box [lo, hi] (k, 3).
 

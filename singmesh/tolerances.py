@@ -779,6 +779,31 @@ REMOVABLE_JUMP = 1e-3
 #: cube of 2 cells round it see them.
 DOMAIN_EDGE_REACH = 2.0
 
+#: An open edge next to an end of F's domain gets a strip up to it
+#: (facets.domain_edges) when both its ends reach that end by Newton
+#: within this many fine cells (the mesh stops up to a cell short of it).
+DOMAIN_STRIP_REACH = 2.0
+
+#: Points put on an end of F's domain where its argument is a rounding
+#: error outside are moved back towards their vertex by 1e-15, 4e-15, ...
+#: of their size, at most this many times, until F is defined there.
+DOMAIN_STRIP_NUDGES = 12
+
+#: A point put on an end of F's domain this close (of the box) to a vertex
+#: is that vertex: the lattice's own vertices on it, snapped there, and
+#: no two vertices closer than the mesh promises (1e-9 of the box).
+DOMAIN_STRIP_SAME = 1e-10
+
+#: Consecutive points of a strip on an end of F's domain closer than this
+#: many fine cells are one (the ends of a lattice edge across that end
+#: land next to each other: a sliver between them).
+DOMAIN_STRIP_MERGE = 0.25
+
+#: A vertex is on an end of F's domain (the mesh's note) when it is this
+#: close (of the box, to first order) to both surfaces whose meeting is it:
+#: the strips' vertices are there to rounding, the lattice's a cell away.
+DOMAIN_STRIP_ON = 1e-9
+
 #: line_roots of a non-polynomial F gives up a piece with F undefined at
 #: an end (0 / 0) and unbounded on it once it is narrower than this part
 #: of its segment: a root closer than that to where F is 0 / 0 is lost (the

@@ -231,3 +231,38 @@ def test_end_at_the_domain_edge_is_said(rotated):
     p = _named_point(notes[0])
     a, b, _ = rot(*p[:, None])
     assert abs(np.hypot(a[0], b[0]) - 1) <= 2 * 3 / 64 * np.sqrt(3)
+
+
+@pytest.mark.parametrize("rotated", [False, True])
+def test_mesh_reaches_the_domain_edge(rotated):
+    # sqrt(1 - u^2 - v^2) - w - 0.2 ends where its root's argument does, on
+    # the circle u^2 + v^2 = 1, w = -0.2 (F -> -w - 0.2 there, finite).
+    # On main the mesh stopped up to a cell short of it (172 open edges at
+    # w = -0.1875, 0.0125 above it).  Checked from the faces: every open
+    # edge inside the box has both ends on that circle (to 1e-9), they run
+    # all round it (length 2 pi to a chord's shortfall), the mesh is one
+    # disc on F = 0 without NaN, and the note says it ends there.
+    if rotated:
+        (u, v, w), rot = _rotated(7)
+    else:
+        u, v, w, rot = "x", "y", "z", lambda x, y, z: np.stack([x, y, z])
+    text = f"sqrt(1 - {u}^2 - {v}^2) - {w} - 0.2"
+    box = np.array(((-1.5, 1.5),) * 3)
+    m, said = _mesh(text, box=box, coarse=16, fine=64)
+    V, T = m.vertices, m.faces
+    assert np.isfinite(V).all() and np.isfinite(m.normals).all() and len(T) > 1000
+    a, b, c = rot(*V.T)
+    inside = 1 - a * a - b * b
+    assert inside.min() >= -1e-12            # in the domain, to the rotation's rounding
+    inside = np.maximum(inside, 0.0)
+    f = np.sqrt(inside) - c - 0.2
+    g = np.hypot(np.hypot(a, b) / np.sqrt(np.maximum(inside, 1e-300)), 1.0)
+    assert (np.abs(f) / g).max() <= 1e-10 * 3
+    assert mc.non_manifold_edges(T) == [] and mc.euler(V, T) == 1 and mc.components(T) == 1
+    open_ = np.array(mc.boundary_edges_off_box(V, T, box), np.int64).reshape(-1, 2)
+    a, b, c = rot(*V[open_.ravel()].T)
+    assert np.hypot(np.hypot(a, b) - 1, c + 0.2).max() <= 1e-9
+    length = np.linalg.norm(V[open_[:, 0]] - V[open_[:, 1]], axis=1).sum()
+    assert 2 * np.pi * (1 - 1e-3) <= length <= 2 * np.pi
+    notes = [n for n in said if "out of its domain" in n]
+    assert len(notes) == 1 and "the mesh ends there, open along" in notes[0]
