@@ -24,6 +24,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from singmesh import tolerances as tol
+from singmesh.errors import SurfaceError
 from singmesh.surface import CHILD_OFFSETS, Surface
 
 from .centre import centre, residual, residual_each
@@ -494,10 +495,35 @@ def _sheets(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -
     that spread ``CURVE_SPAN / 2`` boxes across in two directions (a
     curve's points lie along one).  A curve's clump, a few boxes thick,
     fills a vanishing part of that product once it is that long.
+
+    A square-free polynomial has no such sheet: where one is found F is
+    nearly a square (``x^2 - 1e-20``, two planes 2e-10 apart), refused
+    with a message saying so (:func:`near_double_message`) unless F has
+    no zero there (``x^2 + 1e-20``).
     """
     out = np.zeros(len(lo), bool)
+    for mine, ends, normals in _sheet_clumps(surface, lo, hi, box):
+        out[mine] = True
+        if surface.is_polynomial:
+            message = near_double_message(surface, ends, normals, box)
+            if message is not None:
+                raise SurfaceError(message)
+    return out
+
+
+def _sheet_clumps(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray):
+    """The clumps of candidate boxes :func:`_sheets` finds to be sheets of singular points.
+
+    Yields
+    ------
+    mine : (k,) int ndarray
+        The clump's boxes (indices into ``lo``).
+    ends, normals : (m, 3) ndarrays
+        The singular points Newton reached from samples of the clump, and
+        the clump's normal at each.
+    """
     if len(lo) < tol.CURVE_SPAN ** 2 * tol.SHEET_FILL:
-        return out
+        return
     cells = np.rint((lo - box[:, 0]) / (hi - lo)).astype(np.int64)
     label, _ = _clumps(cells)
     n = np.bincount(label)
@@ -508,7 +534,7 @@ def _sheets(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -
     ext = np.sort(last - first + 1, axis=1)
     wide = np.nonzero((ext[:, 1] >= tol.CURVE_SPAN) & (n >= tol.SHEET_FILL * ext[:, 2] * ext[:, 1]))[0]
     if len(wide) == 0:
-        return out
+        return
     h = float(np.max(hi[0] - lo[0]))
     limit = max(accept_residual(surface), tol.CURVE_RESIDUAL)
     for lab in wide.tolist():
@@ -536,8 +562,50 @@ def _sheets(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -
             continue
         # The spread of the ends across their first principal direction.
         sv = np.linalg.svd(ends - ends.mean(axis=0), compute_uv=False)
-        out[mine] = sv[1] >= 0.5 * tol.CURVE_SPAN * h / np.sqrt(len(ends))
-    return out
+        if sv[1] >= 0.5 * tol.CURVE_SPAN * h / np.sqrt(len(ends)):
+            yield mine, ends, normal[good]
+
+
+def near_double_message(surface: Surface, ends: np.ndarray, normals: np.ndarray, box: np.ndarray) -> str | None:
+    """What to tell the user of a sheet of singular points of a polynomial F, or None.
+
+    F = G^2 - e with e tiny against F's terms is singular to
+    ``CURVE_RESIDUAL`` all along G = 0, and its two sheets G = +-sqrt(e)
+    are 2 sqrt(2 |F| / F_nn) apart (F_nn the second derivative across the
+    sheet): ``x^2 - 1e-20``'s 2e-10, at most ~2e-4 of F's scale, a few
+    thousandths of a cell of any lattice the memory allows; no lattice
+    edge between them sees the sign change.  Where |F| there is below the
+    rounding of F's terms (``INPUT_ROUNDING``: the sphere's square plus
+    1e-16, whose constant rounds to 1) two sheets and none are the same
+    input.  Both are refused with what they are.  Where F has the sign of
+    F_nn above rounding (G^2 + e) it has no zero there: None, nothing to
+    refuse (the sheet's boxes are no points nor curves).
+
+    Parameters
+    ----------
+    ends, normals : (m, 3) ndarrays
+        Points of the sheet (:func:`_sheet_clumps`) and the sheet's normal at each.
+    """
+    f, _, hess = surface.jet(ends)
+    bend = np.einsum("ki,kij,kj->k", normals, hess, normals)
+    noise = tol.INPUT_ROUNDING * surface.degree * surface.rounding * surface.magnitude(ends)
+    lost = np.abs(f) <= noise
+    apart = (f * bend < 0) & ~lost
+    if not (apart.any() or lost.any()):
+        return None
+    # The point said: the nearest sheets (or the largest rounding).
+    gaps = 2.0 * np.sqrt(np.abs(2.0 * f / np.where(bend != 0, bend, np.inf)))
+    i = int(np.flatnonzero(apart)[np.argmin(gaps[apart])]) if apart.any() else int(np.argmax(noise))
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    at = ", ".join(f"{c:.3g}" for c in ends[i])
+    if apart.any():
+        what = (f"F = G^2 - e there with e = {abs(float(f[i])):.2g}: two sheets {gaps[i]:.2g} apart "
+                f"({gaps[i] / size:.2g} of the box), closer than any lattice edge parts")
+    else:
+        what = (f"F = G^2 + e there with |e| <= {float(noise[i]):.2g}, the rounding of F's terms there: two "
+                "sheets or none, rounding cannot tell")
+    return (f"F is nearly a square near ({at}), a near-double component: {what}; mesh G alone "
+            "(its surface once), or write e exactly and large enough to part the sheets by a fine cell")
 
 
 def _curve_chains(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -676,12 +744,16 @@ def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndar
     from its most singular end, 4 and 8 boxes along the Hessian's kernel
     nothing is singular (:func:`_on_curve`): those stay starts.
     """
-    from scipy.cluster.hierarchy import fcluster, linkage
-    from scipy.spatial.distance import pdist
+    from scipy.spatial import cKDTree
 
     if len(x) < 2:
         return x, False
-    labels = fcluster(linkage(pdist(x), method="single"), t=2.0 * cell, criterion="distance")
+    # Single linkage at two boxes: the components of the graph of pairs
+    # that close (a dense matrix of all distances is 63 GB for the 130,000
+    # ends of a sheet's boxes).
+    pairs = cKDTree(x).query_pairs(2.0 * cell, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(x), len(x)))
+    _, labels = connected_components(graph, directed=False)
     drop = np.zeros(len(x), bool)
     res = None
     for lab in np.unique(labels):

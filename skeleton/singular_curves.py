@@ -36,7 +36,7 @@ from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 from .centre import residual
-from .singular import _clumps, candidate_boxes
+from .singular import _clumps, _sheets, candidate_boxes
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,6 +148,15 @@ def curve_samples(surface: Surface, box: np.ndarray, level: int) -> np.ndarray:
     lo, hi = candidate_boxes(surface, box, level)
     if len(lo) == 0:
         return np.zeros((0, 3))
+    if surface.is_polynomial:
+        # A sheet of singular points of a polynomial: F nearly a square
+        # (x^2 - 1e-20), refused here with what it is, before its boxes are
+        # traced as hundreds of curves (and the point search runs out of
+        # memory on their ends).  One without zeros (G^2 + e) is no curve.
+        flat = _sheets(surface, lo, hi, box)
+        lo, hi = lo[~flat], hi[~flat]
+        if len(lo) == 0:
+            return np.zeros((0, 3))
     # A curve makes a long clump of candidate boxes; isolated points make
     # small ones (a few boxes across): no Newton there.
     label, span = _clumps(np.rint((lo - box[:, 0]) / (hi - lo)).astype(np.int64))
