@@ -654,7 +654,7 @@ def _tangencies(f1: Field, f2: Field, box, n: int = 25) -> np.ndarray:
             r0 = res(p)
             J = np.stack([(res(p + h * e) - r0) / h for e in np.eye(3)], axis=-1)
             JT = np.swapaxes(J, 1, 2)
-            d = np.linalg.solve(JT @ J + 1e-12 * np.eye(3), JT @ r0[..., None])[..., 0]
+            d = _solve_each(JT @ J + 1e-12 * np.eye(3), JT @ r0[..., None])[..., 0]
             p = p - np.nan_to_num(np.clip(d, -0.1 * size, 0.1 * size))
         ok = (np.abs(res(p)) < 1e-6).all(axis=1)
     ok &= ((p >= box[:, 0] - 1e-6 * size) & (p <= box[:, 1] + 1e-6 * size)).all(axis=1)
@@ -663,3 +663,20 @@ def _tangencies(f1: Field, f2: Field, box, n: int = 25) -> np.ndarray:
         if all(np.linalg.norm(q - k) > 1e-5 * size for k in keep):
             keep.append(q)
     return np.array(keep) if keep else np.zeros((0, 3))
+
+
+def _solve_each(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve(a, b)`` for a stack, with a zero step for the systems that are singular to
+    rounding rather than an exception for all (fuzz s6-666: normal equations with entries 1e4 to 1e18
+    at starts where the plane 3 y + 3/5 x and the quadric's gradient nearly line up; the judge raised
+    LinAlgError)."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        out = np.zeros(b.shape)
+        for i in range(len(a)):
+            try:
+                out[i] = np.linalg.solve(a[i], b[i])
+            except np.linalg.LinAlgError:
+                pass
+        return out
