@@ -373,6 +373,15 @@ SINGULAR_LEVEL = 8
 SINGULAR_CROWD = 3.0
 SINGULAR_CROWD_LEVELS = 2
 
+#: Non-simple points closer than this many boxes of the point search are
+#: one point.  Such a point is fixed only to where F and grad F are below
+#: rounding, which a line of the surface through it with |grad F| ~ t^5
+#: along it stretches to ~5e-3 (fuzz s6-688: -x^5 y / 2 + ... has the
+#: x-axis; centring ended at x = +-5e-6, four "points" 1e-5 apart, each
+#: with a star, and the stars clashed).  Distinct ones a box apart would
+#: share a star cube anyway.
+NON_SIMPLE_MERGE = 1.0
+
 #: Gauss-Newton steps on a tip system's equations (skeleton/tips.py): they
 #: are smooth at the tip, so a start in its candidate box converges in a
 #: few; the rest are cheap at these few starts.

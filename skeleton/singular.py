@@ -225,6 +225,7 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
         at a point; those are not in ``points``.
     """
     box = np.asarray(box, dtype=float)
+    first_level = level
     found, curve = _points_in(surface, box, *candidate_boxes(surface, box, level), avoid, avoid_radius, on_radius)
     size = float(np.max(box[:, 1] - box[:, 0]))
     for _ in range(tol.SINGULAR_CROWD_LEVELS):
@@ -247,7 +248,31 @@ def singular_points(surface: Surface, box, level: int = 8, avoid: np.ndarray | N
             d, _ = _nearest(at, new)
             found = sorted(found + [sp for sp, far in zip(more, (d > tol.SINGULAR_MERGE * size).tolist()) if far],
                            key=lambda sp: tuple(sp.point))
-    return found, curve
+    return _one_per_flat_point(found, tol.NON_SIMPLE_MERGE * size / (1 << first_level)), curve
+
+
+def _one_per_flat_point(found: list[SingularPoint], radius: float) -> list[SingularPoint]:
+    """``found`` with the non-simple points closer than ``radius`` (chained) kept as one: the
+    least residual (then the least coordinates) of each cluster.  Simple points stay as they are
+    (Labs' septic's nodes a box or two apart are distinct)."""
+    flat = [i for i, sp in enumerate(found)
+            if sp.classification is not None and getattr(sp.classification, "milnor", 0) is None]
+    if len(flat) < 2:
+        return found
+    from scipy.spatial import cKDTree
+
+    at = np.array([found[i].point for i in flat], dtype=float)
+    pairs = cKDTree(at).query_pairs(radius, output_type="ndarray")
+    if len(pairs) == 0:
+        return found
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(at), len(at)))
+    _, label = connected_components(graph, directed=False)
+    drop = set()
+    for lab in np.unique(label).tolist():
+        members = [flat[j] for j in np.flatnonzero(label == lab).tolist()]
+        best = min(members, key=lambda i: (found[i].residual, tuple(found[i].point)))
+        drop.update(i for i in members if i != best)
+    return [sp for i, sp in enumerate(found) if i not in drop]
 
 
 def _crowded(points: np.ndarray, distance: float) -> np.ndarray:
