@@ -373,6 +373,15 @@ SINGULAR_LEVEL = 8
 SINGULAR_CROWD = 3.0
 SINGULAR_CROWD_LEVELS = 2
 
+#: A sheet of singular points of a polynomial is a near-double component
+#: (F = G^2 - e, refused) where F's Hessian has rank one: its second
+#: singular value under this fraction of the first.  There it is ~sqrt(e)
+#: |Hess G| / |grad G|^2 against 2: under 1e-4 over the band of e the sheet
+#: test sees (e up to CURVE_RESIDUAL); where two sheets cross (two curves
+#: of singular points side by side, a clump as wide as a sheet) the two
+#: are comparable.
+NEAR_DOUBLE_RANK = 1e-3
+
 #: Non-simple points closer than this many boxes of the point search are
 #: one point.  Such a point is fixed only to where F and grad F are below
 #: rounding, which a line of the surface through it with |grad F| ~ t^5

@@ -526,14 +526,36 @@ def _sheets(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray) -
     with a message saying so (:func:`near_double_message`) unless F has
     no zero there (``x^2 + 1e-20``).
     """
+    return _sheets_and_zeroless(surface, lo, hi, box)[0]
+
+
+def _sheets_and_zeroless(surface: Surface, lo: np.ndarray, hi: np.ndarray,
+                         box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_sheets`' boxes, and those of them on a near-double sheet with no zero (G^2 + e)."""
     out = np.zeros(len(lo), bool)
+    zeroless = np.zeros(len(lo), bool)
     for mine, ends, normals in _sheet_clumps(surface, lo, hi, box):
         out[mine] = True
-        if surface.is_polynomial:
+        if surface.is_polynomial and _rank_one(surface, ends):
             message = near_double_message(surface, ends, normals, box)
             if message is not None:
                 raise SurfaceError(message)
-    return out
+            zeroless[mine] = True
+    return out, zeroless
+
+
+def _rank_one(surface: Surface, ends: np.ndarray) -> bool:
+    """Whether F's Hessian has rank one (to ``NEAR_DOUBLE_RANK``) at most of ``ends``.
+
+    Near G^2 - e it is 2 grad G grad G^T + 2 G Hess G, G ~ sqrt(e): rank one.
+    Two curves of singular points crossing make a clump as wide as a sheet
+    (the ellipses of two cylinders (x^2 + y^2 - 1)(x^2 + z^2 - 1) at
+    (+-1, 0, 0)), their points with F = 0 to rounding, but two sheets cross
+    there: rank two.
+    """
+    sv = np.linalg.svd(surface.hessian(ends), compute_uv=False)
+    flat = sv[:, 1] <= tol.NEAR_DOUBLE_RANK * sv[:, 0]
+    return bool(2 * flat.sum() > len(ends))
 
 
 def _sheet_clumps(surface: Surface, lo: np.ndarray, hi: np.ndarray, box: np.ndarray):

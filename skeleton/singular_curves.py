@@ -36,7 +36,7 @@ from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 from .centre import residual
-from .singular import _clumps, _sheets, candidate_boxes
+from .singular import _clumps, _sheets_and_zeroless, candidate_boxes
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,7 +153,7 @@ def curve_samples(surface: Surface, box: np.ndarray, level: int) -> np.ndarray:
         # (x^2 - 1e-20), refused here with what it is, before its boxes are
         # traced as hundreds of curves (and the point search runs out of
         # memory on their ends).  One without zeros (G^2 + e) is no curve.
-        flat = _sheets(surface, lo, hi, box)
+        _, flat = _sheets_and_zeroless(surface, lo, hi, box)
         lo, hi = lo[~flat], hi[~flat]
         if len(lo) == 0:
             return np.zeros((0, 3))

@@ -385,7 +385,7 @@ def test_nearly_a_square_is_said(text, e, apart, tmp_path, capsys):
     import time
 
     out = tmp_path / "out.ply"
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU: the machine is shared
     status = main(["mesh", text, "-o", str(out)])
     captured = capsys.readouterr()
     assert status == 2
@@ -399,7 +399,7 @@ def test_nearly_a_square_is_said(text, e, apart, tmp_path, capsys):
     else:
         assert "rounding cannot tell" in line, line
     assert not out.exists()
-    assert time.perf_counter() - t0 < 30
+    assert time.process_time() - t0 < 30
 
 
 @pytest.mark.parametrize("square, e", [("x^2", "1e-20"), ("(x^2 + y^2 + z^2 - 1)^2", "1/10^12"),
@@ -415,12 +415,12 @@ def test_nearly_a_square_without_zeros_is_empty(square, e):
 
     g2 = sp.sympify(square.replace("^", "**"), rational=True)
     assert sp.sqf_list(g2)[1][0][1] == 2 and sp.sympify(e.replace("^", "**"), rational=True) > 0  # F >= e > 0
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU: the machine is shared
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         m = singmesh.mesh(f"{square} + {e}", ((-1.0, 1.0),) * 3)
     assert len(m.faces) == 0
-    assert time.perf_counter() - t0 < 30
+    assert time.process_time() - t0 < 30
 
 
 @pytest.mark.parametrize("text, shown", [
