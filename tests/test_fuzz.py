@@ -477,24 +477,15 @@ REGRESSIONS = [
     ("s4-26 sliver at an edge of the box",
      "(1/3*y*z^2 - 2*y^2*z + 2*y^3 - 9/4*x*z^2 + 7/8*x + 5/7)"
      "*(-3/8*x*z^2 + 1/3*x^2*z - 7*x^2*y - 5*x^2 + 2*z + 7*x + 8)", ((-0.5, 0.5), (-0.5, 0.5), (-2.0, 2.0)), 8, 64),
-    # The judge's own failure: its search for tangencies of the two factors
-    # raised LinAlgError on normal equations singular to rounding at a few
-    # of its 200 starts (tests/fuzzcases.py _solve_each); the mesh is clean.
     # A non-simple point at the origin with the x-axis on the surface, flat
     # to order 5 along it (test_a_flat_line_through_a_non_simple_point_is_one_point):
     # four points 1e-5 apart along the axis, clashing stars, 130 open edges
     # (skeleton/singular.py _one_per_flat_point).
     ("s6-688 a flat line through a non-simple point", "-6*z^6 - 1/2*x^5*y - 1*x*y^2*z + 1*y^2*z",
      ((-1.0, 1.0),) * 3, 8, 64),
-    # Clean by the judge since non-simple points a box apart are one
-    # (_one_per_flat_point): on main six "non-simple points" 0.002 to 0.03
-    # apart beside the double curve near (-0.075, 0.1, -0.46), stars
-    # clashing (5 close vertex pairs, 3 open and 3 non-manifold edges).
-    # Still not right: A16 to A19 "points" without a vertex are reported
-    # beside the curve (points beside curves: another session's class).
-    ("s1-494 non-simple points beside a curve",
-     "(1/2*x^2*y + 8*x^3 - 2/7*z^2 - 6/7*x)*(-9*y^2 + 3*x*z - 1/2*x*y - 1/8*y)",
-     ((-2.0, 2.0), (-1.0, 1.0), (-0.5, 0.5)), 8, 64),
+    # The judge's own failure: its search for tangencies of the two factors
+    # raised LinAlgError on normal equations singular to rounding at a few
+    # of its 200 starts (tests/fuzzcases.py _solve_each); the mesh is clean.
     ("s6-666 the judge's tangency search", "(3*y + 3/5*x)*(-8*y^2*z - 4*x^2 + 2/5)", ((-1.0, 1.0),) * 3, 8, 64),
 ]
 
@@ -1336,6 +1327,40 @@ OPEN_CASES = [
     (4, 16, "the y-axis is a curve of D6 points for y < 0 (x (z^2 + 3 x^4 / y): a plane and two sheets "
             "tangent along the axis), read as D4: sheets left out up to 9 cells from the axis (found by the "
             "judge's check of pieces left out)"),
+    # Seeds 6 and 7 (fuzz.py --n 1000, coarse 8, fine 64; 9 and 7 failures
+    # on main ba35d69, s6-688 and s6-666 fixed on this branch).
+    (6, 42, "a cubic times a plane, both through the origin: 11 edges of six triangles on the double "
+            "curve, the first at (0.14, 0.39, -0.2); not looked into (curves of singular points are being "
+            "worked on elsewhere)"),
+    (6, 344, "-3 z^5 - 3 y^5 + 3/2 x^3 z^2 has the x-axis as a curve of singular points (F, grad F vanish "
+             "on y = z = 0): 27 vertices up to 3.8e-5 of the box off F = 0; not a product, not looked into"),
+    (6, 414, "a plane times a cubic: 86 edges of six triangles, the first at (0.12, -0.16, -0.16)"),
+    (6, 486, "a cubic times a quadric: 68 edges of six triangles, the first at (-0.95, 0.47, 0.51), 1.6 "
+             "cells inside the face x = -1"),
+    (6, 570, "a quadric cone (apex at the origin) times a cubic: 4 open edges and 23 edges of three "
+             "triangles by the double curve at (-0.16, 0.08, -0.12), 0.2 from the apex"),
+    (6, 601, "a smooth surface but for a corank-3 point at the origin (3-jet 0) with the y-axis, a lattice "
+             "line, on the surface through it: the point is reported with no vertex and no branches and 70 "
+             "open edges lie on the faces of its star region (x, z = +-0.125); the star's cone over its "
+             "boundary is not built (facets/stars.py), not found why"),
+    (6, 710, "the plane z = 4/15 times a cubic: 4 open edges and 19 edges of three triangles in that "
+             "plane (the double curve), the first open one at (-1.02, 0.03, 0.27)"),
+    (7, 192, "as s6-601: a corank-3 point at the origin with the y- and z-axes, lattice lines, on the surface "
+             "through it: no vertex, no branches, 149 open edges on its star region's faces"),
+    (7, 422, "the cubic -8 y^3 + ... + 4 x^2 + 1 touches the face y = 0.5 at (0, 0.5, 0) (its double curve "
+             "with the plane z = 0 ends there): two vertices 4.7e-6 and 1e-3 outside the box, polygon "
+             "centres projected along grad F across the face (facets/triangulate.py), not held in it; projecting "
+             "those again within the face they crossed makes it clean (tried, not kept: no case of the class "
+             "that fails on main was found, the cubic alone and tilted copies are clean)"),
+    (7, 434, "two cubics: 3 pairs of vertices closer than 1e-9 of the box"),
+    (7, 458, "a quadric cone (apex at the origin) times a cubic: 15 edges of three triangles, the first "
+             "at (0.93, -0.34, -1.99) by the face z = -2"),
+    (7, 662, "a plane times a cubic: a close vertex pair and 2 vertices 5.4e-8 of the box off F = 0"),
+    (7, 742, "a plane times a cubic whose x-axis is a curve of singular points of its own (y = z = 0): 20 "
+             "edges of four triangles along the axis, which the judge allows only on the factors' common "
+             "curve (maybe the judge's limit: it saw no curve of that factor; not checked)"),
+    (7, 962, "a cubic times a quadric: 9 open edges and 67 edges of five triangles, the first at "
+             "(0.39, 0.12, -0.54)"),
 ]
 
 
