@@ -24,7 +24,6 @@ from scipy.spatial import cKDTree
 
 from singmesh import tolerances as tol
 from singmesh.facets.tubes import faces_of
-from singmesh.skeleton.creases import _newton
 
 
 def _oriented_boundary(faces: np.ndarray) -> np.ndarray:
@@ -51,7 +50,7 @@ def _onto_edge(systems, points, box, reach):
         for rows, ex in ((np.flatnonzero(~faced), None), (np.flatnonzero(faced), extra)):
             if not len(rows):
                 continue
-            q, ok = _newton(system, points[rows], reach, None if ex is None else ex[rows])
+            q, ok = system.newton(points[rows], reach, None if ex is None else ex[rows])
             d = np.linalg.norm(q - points[rows], axis=1)
             inside = ((q >= box[:, 0] - 1e-12 * reach) & (q <= box[:, 1] + 1e-12 * reach)).all(axis=1)
             take = ok & inside & (d < best[rows])

@@ -38,6 +38,7 @@ from singmesh.skeleton.splitting import compose, translate_many
 from .errors import SurfaceError
 from .monomials import _MANY, differentiate, evaluate_tensor, evaluate_tensors, evaluate_tensors_many, powers
 from .syntax import VARIABLES, X, Y, Z, read_equation, unused_message  # noqa: F401  (X, Y, Z re-exported)
+from . import tolerances as tol
 from .tolerances import CANDIDATE_DUST, DISPLAY_DIGITS, MAX_DEGREE, MAX_POWER, PROJECT_HALVINGS, ZERO_ULPS
 
 #: ``offsets[c]``: the corner offset (in halves) of child c of a split box.
@@ -69,6 +70,45 @@ class CreaseSystem(abc.ABC):
     @abc.abstractmethod
     def active(self, points) -> np.ndarray:
         """(n,) bool: at these points (on the common zeros of G1, G2), F = 0 has a kink."""
+
+    def newton(self, x: np.ndarray, reach, extra=None) -> tuple[np.ndarray, np.ndarray]:
+        """Minimum-norm Newton from points x (k, 3) onto G1 = G2 = 0 (and ``extra``).
+
+        Shared by the stages that put points on such a curve (the creases
+        of the skeleton stage, the domain's edges of the facets stage).
+
+        ``extra``: optional (k, 4) rows (normal n, offset c) of a third
+        equation n . x = c (a face of the box).  ``reach``: a point that moves
+        further is refused.  Returns (points, ok).
+        """
+        x0 = np.array(x, float).reshape(-1, 3)
+        x = x0.copy()
+        with np.errstate(all="ignore"):
+            for _ in range(tol.CREASE_NEWTON):
+                v, g = self.values(x)
+                if extra is not None:
+                    v = np.concatenate([v, (np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3])[:, None]], 1)
+                    g = np.concatenate([g, extra[:, None, :3]], 1)
+                # A point outside a piece's domain (|x|^2.5 with x < 0 once the
+                # Abs is replaced by x) stays where it is, and is refused below.
+                bad = ~(np.isfinite(v).all(axis=1) & np.isfinite(g).all(axis=(1, 2)))
+                if bad.any():
+                    v, g = np.where(bad[:, None], 0.0, v), np.where(bad[:, None, None], 0.0, g)
+                step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
+                step = np.where(np.isfinite(step), step, 0.0)
+                x_new = x - step
+                # Converged everywhere: steps at rounding level of the points.
+                small = np.all(np.abs(step) <= 4 * np.finfo(float).eps * np.maximum(np.abs(x), 1.0))
+                x = x_new
+                if small:
+                    break
+            v, g = self.values(x)
+            size = np.linalg.norm(g, axis=2) * np.maximum(np.abs(x).max(axis=1), 1.0)[:, None]
+            ok = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)
+            if extra is not None:
+                ok &= np.abs(np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3]) <= 1e-12 * np.abs(x).max(axis=1).clip(1)
+            ok &= np.isfinite(x).all(axis=1) & (np.linalg.norm(x - x0, axis=1) <= reach)
+        return x, ok
 
     @abc.abstractmethod
     def may_vanish(self, data: np.ndarray) -> np.ndarray:

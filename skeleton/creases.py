@@ -46,44 +46,6 @@ CREASE = "crease"
 _EPS = float(np.finfo(float).eps)
 
 
-# ---------------------------------------------------------------- Newton
-def _newton(system: CreaseSystem, x: np.ndarray, reach, extra=None):
-    """Minimum-norm Newton from points x (k, 3) onto G1 = G2 = 0 (and ``extra``).
-
-    ``extra``: optional (k, 4) rows (normal n, offset c) of a third
-    equation n . x = c (a face of the box).  ``reach``: a point that moves
-    further is refused.  Returns (points, ok).
-    """
-    x0 = np.array(x, float).reshape(-1, 3)
-    x = x0.copy()
-    with np.errstate(all="ignore"):
-        for _ in range(tol.CREASE_NEWTON):
-            v, g = system.values(x)
-            if extra is not None:
-                v = np.concatenate([v, (np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3])[:, None]], 1)
-                g = np.concatenate([g, extra[:, None, :3]], 1)
-            # A point outside a piece's domain (|x|^2.5 with x < 0 once the
-            # Abs is replaced by x) stays where it is, and is refused below.
-            bad = ~(np.isfinite(v).all(axis=1) & np.isfinite(g).all(axis=(1, 2)))
-            if bad.any():
-                v, g = np.where(bad[:, None], 0.0, v), np.where(bad[:, None, None], 0.0, g)
-            step = np.einsum("kij,kj->ki", np.linalg.pinv(g, rcond=1e-13), v)
-            step = np.where(np.isfinite(step), step, 0.0)
-            x_new = x - step
-            # Converged everywhere: steps at rounding level of the points.
-            small = np.all(np.abs(step) <= 4 * _EPS * np.maximum(np.abs(x), 1.0))
-            x = x_new
-            if small:
-                break
-        v, g = system.values(x)
-        size = np.linalg.norm(g, axis=2) * np.maximum(np.abs(x).max(axis=1), 1.0)[:, None]
-        ok = np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)
-        if extra is not None:
-            ok &= np.abs(np.einsum("ki,ki->k", extra[:, :3], x) - extra[:, 3]) <= 1e-12 * np.abs(x).max(axis=1).clip(1)
-        ok &= np.isfinite(x).all(axis=1) & (np.linalg.norm(x - x0, axis=1) <= reach)
-    return x, ok
-
-
 def _tangent(system: CreaseSystem, x: np.ndarray) -> np.ndarray:
     """Unit tangents (k, 3) of the crease at points x: grad G1 x grad G2."""
     _, g = system.values(np.asarray(x, float).reshape(-1, 3))
@@ -99,7 +61,7 @@ def crease_samples(surface: Surface, system: CreaseSystem, box: np.ndarray, leve
         return np.zeros((0, 3))
     size = (box[:, 1] - box[:, 0]) / (1 << level)
     start = box[:, 0] + (corner + 0.5) * size
-    x, ok = _newton(system, start, 2.0 * float(size.max()))
+    x, ok = system.newton(start, 2.0 * float(size.max()))
     ok &= np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
     x = x[ok]
     return x[system.active(x)] if len(x) else x
@@ -117,7 +79,7 @@ def _clip(system: CreaseSystem, box: np.ndarray, x: np.ndarray, y: np.ndarray, h
     extra = np.zeros((1, 4))
     extra[0, axis] = 1.0
     extra[0, 3] = value
-    z, ok = _newton(system, q[None], 2.0 * h, extra)
+    z, ok = system.newton(q[None], 2.0 * h, extra)
     if not ok[0]:
         return None
     z = z[0]
@@ -168,7 +130,7 @@ def _runs_along(systems: list, si: int, sj: int, z: np.ndarray, ahead: np.ndarra
     # (Along the trace's step: at z the tangents are the pieces rounding
     # picks too.  A point Newton takes back to z tells nothing.)
     t = ahead / np.linalg.norm(ahead)
-    q, ok = _newton(systems[si], z + 0.5 * h * np.array([t, -t]), h)
+    q, ok = systems[si].newton(z + 0.5 * h * np.array([t, -t]), h)
     ok &= np.linalg.norm(q - z, axis=1) >= 0.25 * h
     if not ok[0] or not systems[si].active(q[:1])[0]:
         return False
@@ -177,7 +139,7 @@ def _runs_along(systems: list, si: int, sj: int, z: np.ndarray, ahead: np.ndarra
     if np.any(np.all(np.abs(v) <= tol.CREASE_RESIDUAL * np.maximum(size, 1e-300), axis=1)):
         return True
     tj = _tangent(systems[sj], z)[0]
-    r, ok = _newton(systems[sj], z + 0.5 * h * np.array([tj, -tj]), h)
+    r, ok = systems[sj].newton(z + 0.5 * h * np.array([tj, -tj]), h)
     ok &= np.linalg.norm(r - z, axis=1) >= 0.25 * h
     return not (ok & systems[sj].active(r)).any()
 
@@ -259,7 +221,7 @@ def _steps_ahead(system: CreaseSystem, x: np.ndarray, t: np.ndarray, h: float, k
     few.  Returns ((m, 3), (m, 3)) with m <= k, tangents oriented along the trace.
     """
     pred = x + h * np.arange(1, k + 1)[:, None] * t
-    z, ok = _newton(system, pred, h)
+    z, ok = system.newton(pred, h)
     tz = _tangent(system, z)
     prev, tp = x, t
     m = 0
@@ -282,7 +244,7 @@ def _one_step(system: CreaseSystem, box: np.ndarray, pts: list, t: np.ndarray, h
     """
     x = pts[-1]
     for scale in (1.0, 0.5, 0.25):
-        z, ok = _newton(system, (x + scale * h * t)[None], scale * h)
+        z, ok = system.newton((x + scale * h * t)[None], scale * h)
         if ok[0] and np.dot(z[0] - x, t) > 0.3 * scale * h:
             y = z[0]
             t_new = _tangent(system, y)[0]
@@ -332,7 +294,7 @@ def _ends(system_of: list, systems: list, inside: np.ndarray, outside: np.ndarra
         act = np.zeros(k, bool)
         for s in sorted(set(system_of)):
             rows = np.nonzero(np.asarray(system_of) == s)[0]
-            z, ok = _newton(systems[s], mid[rows], h)
+            z, ok = systems[s].newton(mid[rows], h)
             mid[rows] = np.where(ok[:, None], z, mid[rows])
             act[rows] = systems[s].active(mid[rows]) & ok
         a = np.where(act[:, None], mid, a)
@@ -433,7 +395,7 @@ def _densify(systems: list, lines: list, pieces: int) -> list:
         # next to a corner where the crease itself bends (an octahedron's
         # vertex) it would land on the corner.
         reach = np.repeat(0.5 * np.linalg.norm(b - a, axis=1) / pieces, pieces - 1)
-        z, ok = _newton(systems[s], inner, reach)
+        z, ok = systems[s].newton(inner, reach)
         grid[:, 1:] = z.reshape(len(a), pieces - 1, 3)
         good = np.ones((len(a), pieces), bool)
         good[:, 1:] = ok.reshape(len(a), pieces - 1)
@@ -859,7 +821,7 @@ def _lead_in(system, v: np.ndarray, z: np.ndarray, h: float) -> np.ndarray:
     if len(chord):
         d = (z - v) / np.linalg.norm(z - v)
         planes = np.hstack([np.tile(d, (len(chord), 1)), (chord @ d)[:, None]])
-        x, ok = _newton(system, chord, 0.5 * np.linalg.norm(z - v) / n, extra=planes)
+        x, ok = system.newton(chord, 0.5 * np.linalg.norm(z - v) / n, extra=planes)
         chord = x[ok]
     return np.vstack([chord, z[None]])
 
