@@ -255,24 +255,31 @@ def _one_per_flat_point(found: list[SingularPoint], radius: float) -> list[Singu
     """``found`` with the non-simple points closer than ``radius`` (chained) kept as one: the
     least residual (then the least coordinates) of each cluster.  Simple points stay as they are
     (Labs' septic's nodes a box or two apart are distinct)."""
-    flat = [i for i, sp in enumerate(found)
-            if sp.classification is not None and getattr(sp.classification, "milnor", 0) is None]
+    flat = np.array([i for i, sp in enumerate(found)
+                     if sp.classification is not None and getattr(sp.classification, "milnor", 0) is None], int)
     if len(flat) < 2:
         return found
+    at = np.array([found[i].point for i in flat], dtype=float)
+    _, label = linked(at, radius)
+    res = np.array([found[i].residual for i in flat], dtype=float)
+    order = np.lexsort((at[:, 2], at[:, 1], at[:, 0], res, label))
+    first = np.r_[True, label[order][1:] != label[order][:-1]]
+    drop = set(flat[order[~first]].tolist())
+    return [sp for i, sp in enumerate(found) if i not in drop]
+
+
+def linked(points: np.ndarray, radius: float) -> tuple[int, np.ndarray]:
+    """Single-linkage clusters of ``points`` at ``radius``: (count, label of each point).
+
+    The components of the graph of pairs closer than ``radius`` (a k-d
+    tree's pairs, not a dense matrix of all distances: 63 GB for the
+    130,000 ends of a sheet's boxes).
+    """
     from scipy.spatial import cKDTree
 
-    at = np.array([found[i].point for i in flat], dtype=float)
-    pairs = cKDTree(at).query_pairs(radius, output_type="ndarray")
-    if len(pairs) == 0:
-        return found
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(at), len(at)))
-    _, label = connected_components(graph, directed=False)
-    drop = set()
-    for lab in np.unique(label).tolist():
-        members = [flat[j] for j in np.flatnonzero(label == lab).tolist()]
-        best = min(members, key=lambda i: (found[i].residual, tuple(found[i].point)))
-        drop.update(i for i in members if i != best)
-    return [sp for i, sp in enumerate(found) if i not in drop]
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points), len(points)))
+    return connected_components(graph, directed=False)
 
 
 def _crowded(points: np.ndarray, distance: float) -> np.ndarray:
@@ -791,16 +798,10 @@ def _dense_chains(surface: Surface, x: np.ndarray, cell: float) -> tuple[np.ndar
     from its most singular end, 4 and 8 boxes along the Hessian's kernel
     nothing is singular (:func:`_on_curve`): those stay starts.
     """
-    from scipy.spatial import cKDTree
-
     if len(x) < 2:
         return x, False
-    # Single linkage at two boxes: the components of the graph of pairs
-    # that close (a dense matrix of all distances is 63 GB for the 130,000
-    # ends of a sheet's boxes).
-    pairs = cKDTree(x).query_pairs(2.0 * cell, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(x), len(x)))
-    _, labels = connected_components(graph, directed=False)
+    # Single linkage at two boxes.
+    _, labels = linked(x, 2.0 * cell)
     drop = np.zeros(len(x), bool)
     res = None
     for lab in np.unique(labels):

@@ -36,7 +36,7 @@ from singmesh import tolerances as tol
 from singmesh.surface import Surface
 
 from .centre import residual
-from .singular import _clumps, _sheets_and_zeroless, candidate_boxes
+from .singular import _clumps, _sheets_and_zeroless, candidate_boxes, linked
 
 
 @dataclass(frozen=True, eq=False)
@@ -1611,12 +1611,7 @@ def _long_clusters(x: np.ndarray, gap: float, length: float) -> np.ndarray:
     """The points in clusters (single linkage at ``2 gap``) that extend over ``length`` at least."""
     if len(x) < 3:
         return x
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    pairs = cKDTree(x).query_pairs(2.0 * gap, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(x), len(x)))
-    n, label = connected_components(graph, directed=False)
+    n, label = linked(x, 2.0 * gap)
     lo = np.full((n, 3), np.inf)
     hi = np.full((n, 3), -np.inf)
     np.minimum.at(lo, label, x)
