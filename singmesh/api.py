@@ -508,7 +508,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
     # half-plane: a sheet of singular points, and a curve of tips at its
     # edge), the one line saying so is the whole answer.
     if len(faces) == 0 and overflow and not surf.is_polynomial:
-        touch = _why_empty(surf, b)
+        touch = _why_empty(surf, b, 1 << fine_level)
         if "only touches 0" in touch:
             m.stats["touches_zero"] = touch[len("empty mesh: "):]
             warnings.warn(touch, EmptyMeshWarning, stacklevel=3)
@@ -531,7 +531,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         if m.stats["open_at_domain_edge"]:
             warnings.warn(m.domain_edge_note(), SingularPointWarning, stacklevel=3)
     if len(faces) == 0 and not len(points) and not len(curves.points):
-        warnings.warn(_why_empty(surf, b), EmptyMeshWarning, stacklevel=3)
+        warnings.warn(_why_empty(surf, b, 1 << fine_level), EmptyMeshWarning, stacklevel=3)
     elif len(faces) == 0 and (overflow or any(c.half_sheets for c in curve_list)):
         # Not silent either: only "curves" traced in a plane of singular
         # points came out (x^2 - 1e-20), curves with sheets and no sheet.
@@ -610,8 +610,15 @@ def _find_skeleton_nodes(surf: Surface, box: np.ndarray, level: int):
         return skeleton_nodes(surf, box, level=level)
 
 
-def _why_empty(surface: Surface, box: np.ndarray) -> str:
-    """One line saying why the mesh of ``surface`` in ``box`` is empty."""
+def _why_empty(surface: Surface, box: np.ndarray, fine: int | None = None) -> str:
+    """One line saying why the mesh of ``surface`` in ``box`` is empty.
+
+    Raises
+    ------
+    SurfaceError
+        Where F changes sign, but no lattice edge of ``fine`` cells a side
+        sees it (sheets closer than a cell).
+    """
     s = np.linspace(0.0, 1.0, 9)
     grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
     with np.errstate(all="ignore"):
@@ -626,16 +633,44 @@ def _why_empty(surface: Surface, box: np.ndarray) -> str:
         # from the samples nearest it.
         x, f = _towards_zero(surface, box, x, f)
     if ((f >= 0).all() or (f <= 0).all()) and (f == 0).any():
+        p = x[np.argmax(f == 0)]
+        other = _other_sign_near(surface, box, p, -1.0 if (f >= 0).all() else 1.0, float(np.abs(f).max()))
+        if other is not None:
+            # The zero is a crossing, not a touching: the surface is there
+            # but thinner than a cell ((x - 0.013)^2 - 1e-6: two planes
+            # 0.002 apart between lattice planes 0.0625 apart).  An empty
+            # mesh would be a wrong answer; say what to change.
+            at = ", ".join(f"{c:.6g}" for c in other)
+            cell = "" if fine is None else f" ({float(np.max(box[:, 1] - box[:, 0])) / fine:.3g})"
+            raise SurfaceError(
+                f"F = {surface} changes sign near ({at}) between lattice points: the surface there is "
+                f"thinner than a fine cell{cell} and no lattice edge meets it; raise fine or shrink the box")
         # F touches 0 without changing sign (-|z|, -(x^2 + y^2)): such
         # zeros bound no solid and are not meshed; saying "both signs"
         # would send the user looking for a zero that is not missing.
-        p = x[np.argmax(f == 0)]
         side = ">=" if (f >= 0).all() else "<="
         return (f"empty mesh: F = {surface} is {side} 0 in the box {where} and only touches 0 (e.g. at "
                 f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g})) without changing sign: such zeros bound no solid "
                 "and are not meshed")
     sign = "positive" if (f > 0).all() else "negative" if (f < 0).all() else "of both signs but without a zero found"
     return f"empty mesh: the surface F = {surface} does not meet the box {where} (F is {sign} there)"
+
+
+def _other_sign_near(surface: Surface, box: np.ndarray, p: np.ndarray, sign: float, scale: float) -> np.ndarray | None:
+    """A point near the zero ``p`` where F has ``sign`` above ``EMPTY_TOUCH`` of ``scale``, or None.
+
+    Steps of 1e-2 down to 1e-9 of the box along the axes from ``p``: a
+    zero where F crosses has the other sign on one side at some step; one
+    where F only touches 0 (-|z|, a double root) has not.
+    """
+    size = float(np.max(box[:, 1] - box[:, 0]))
+    steps = size * 10.0 ** -np.arange(2, 10)
+    dirs = np.concatenate([np.eye(3), -np.eye(3)])
+    q = np.clip(p + (steps[:, None, None] * dirs[None]).reshape(-1, 3), box[:, 0], box[:, 1])
+    with np.errstate(all="ignore"):
+        v = surface(q)
+    hit = np.flatnonzero(np.isfinite(v) & (sign * v > tol.EMPTY_TOUCH * scale))
+    return q[hit[0]] if len(hit) else None
 
 
 def _towards_zero(surface: Surface, box: np.ndarray, x: np.ndarray, f: np.ndarray):

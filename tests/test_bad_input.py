@@ -441,3 +441,50 @@ def test_huge_numbers_are_shown_short(text, shown):
     # The exact number is what was meshed: the unit sphere for the last case.
     if "1e-300" in text:
         assert len(m.faces) > 0 and np.abs(np.linalg.norm(m.vertices, axis=1) - 1).max() < 1e-12
+
+
+#: Two sheets closer than a fine cell, parted by far more than rounding
+#: (G^2 - e with e well above F's rounding): (text, the box, fine, a point
+#: between the sheets).  Slabs between lattice planes, off-lattice float
+#: positions with 15 digits.
+THIN_SLABS = [
+    ("(x - 0.0131234567891234)^2 - 1.23456789012345e-6", ((-1.0, 1.0),) * 3, 32, (0.0131234567891234, 0.2, 0.3)),
+    ("(y + 0.371234567890123)^2 - 2.5e-7", ((-1.0, 1.0),) * 3, 32, (0.1, -0.371234567890123, -0.4)),
+    ("(x - 0.0131234567891234)^2 - 1.23456789012345e-6", ((-1.0, 1.0),) * 3, 64, (0.0131234567891234, 0.2, 0.3)),
+]
+
+
+@pytest.mark.parametrize("text, box, fine, inside", THIN_SLABS, ids=[f"{c[0]}-{c[2]}" for c in THIN_SLABS])
+def test_sheets_closer_than_a_cell_are_refused_not_empty(text, box, fine, inside):
+    """F > 0 at every lattice point but < 0 in a slab thinner than a fine
+    cell between two of its planes: the surface is there, and no lattice
+    edge meets it.  Not an empty mesh that says F "only touches 0" (what
+    main said of ``(x - 0.013)^2 - 1e-6`` at fine 32; at the defaults main
+    ran out of memory after a minute: 16 GiB of distances between the
+    65,536 Newton ends along the slab), but one line naming a point where
+    F has the other sign and what to change."""
+    import re
+
+    import sympy as sp
+
+    x, y, z = sp.symbols("x y z")
+    f = sp.lambdify((x, y, z), sp.sympify(text.replace("^", "**")))
+    assert f(*inside) < 0  # the slab is real
+    with pytest.raises(singmesh.SurfaceError) as err:
+        singmesh.mesh(text, box, coarse=8, fine=fine)
+    line = str(err.value)
+    assert "\n" not in line and "only touches" not in line
+    assert "changes sign near (" in line and "thinner than a fine cell" in line and "raise fine" in line, line
+    named = [float(v) for v in re.search(r"changes sign near \(([^)]*)\)", line).group(1).split(",")]
+    assert f(*named) < 0, line  # the point named is in the slab
+    assert abs(named[0] - inside[0]) < 0.01 or abs(named[1] - inside[1]) < 0.01, line
+
+
+def test_cli_sheets_closer_than_a_cell(tmp_path, capsys):
+    """The CLI says the same in one line, status 2, no file."""
+    out = tmp_path / "out.ply"
+    status = main(["mesh", THIN_SLABS[0][0], "--box", "-1", "1", "-1", "1", "-1", "1", "--fine", "32", "--coarse", "8",
+                   "-o", str(out)])
+    line = _one_line(capsys.readouterr().err)
+    assert status == 2 and "thinner than a fine cell" in line, line
+    assert not out.exists()

@@ -159,6 +159,32 @@ def test_three_symmetric_candidates_give_no_cluster_warning():
     assert len(reps) == 3  # three points 0.42 apart: three clusters
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_dedupe_clusters_are_scipys_single_linkage(seed):
+    """``_dedupe``'s clusters (a k-d tree's pairs) are scipy's single-linkage
+    clusters cut at the radius (``fcluster(linkage(pdist))``, the dense
+    computation it replaced): the same representatives, bit for bit, for
+    chains, clumps and lone points, with and without a key."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
+
+    from singmesh.skeleton.singular import _dedupe, _representatives
+
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-1, 1, size=(12, 3))
+    chain = np.cumsum(rng.normal(scale=0.03, size=(40, 3)), axis=0)  # a chain of links under the radius
+    x = np.vstack([centres[rng.integers(0, 12, 200)] + rng.normal(scale=0.02, size=(200, 3)), chain,
+                   rng.uniform(-3, 3, size=(30, 3))])
+    key = rng.uniform(size=len(x))
+    for k in (None, key):
+        labels = fcluster(linkage(pdist(x), method="single"), t=0.1, criterion="distance")
+        reps, extent = _representatives(x, labels, k)
+        order = np.lexsort(reps.T[::-1])
+        got, spans = _dedupe(x, 0.1, key=k, spans=True)
+        assert np.array_equal(got, reps[order]) and np.array_equal(spans, extent[order])
+        assert 1 < len(got) < len(x)
+
+
 def _boundary_cones(seed: int, n: int):
     """``n`` cones (float coefficients, 17 digits) with the apex on a face of
     [0, 1]^3 off and on the lattice, on an edge, at a corner and 1e-15 to
