@@ -83,8 +83,13 @@ def box_graph(box_links_arrays, box: int) -> nx.DiGraph:
 
 
 def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.ndarray,
-                n_events: int) -> Cycles:
-    """Orbits of the successor map of every box's links."""
+                n_events: int, key: np.ndarray | None = None) -> Cycles:
+    """Orbits of the successor map of every box's links.
+
+    With the events' vertex ``key`` (E,), a box whose links break at a
+    lattice point first gets its two events there joined
+    (:func:`_corner_bridges`).
+    """
     node_src = box * n_events + src
     node_dst = box * n_events + dst
     nodes, inv = unique_inverse(np.concatenate([node_src, node_dst]))
@@ -94,6 +99,11 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     in_deg = np.bincount(b, minlength=n)
     node_box = nodes // n_events
     bad_node = (out_deg != 1) | (in_deg != 1)
+    if key is not None and bad_node.any():
+        more = _corner_bridges(nodes, a, b, out_deg, in_deg, square, n_events, key)
+        if len(more[0]):
+            return find_cycles(np.concatenate([box, more[0]]), np.concatenate([src, more[1]]),
+                               np.concatenate([dst, more[2]]), np.concatenate([square, more[3]]), n_events)
     broken = np.unique(node_box[bad_node])
     good = ~np.isin(box, broken)
     a, b, square = a[good], b[good], square[good]
@@ -130,6 +140,44 @@ def find_cycles(box: np.ndarray, src: np.ndarray, dst: np.ndarray, square: np.nd
     offsets = np.append(start, len(idx))
     return Cycles(box=node_box[idx[start]], offsets=offsets, events=nodes[idx] % n_events,
                   squares=out_square[idx], broken_boxes=broken)
+
+
+def _corner_bridges(nodes: np.ndarray, a: np.ndarray, b: np.ndarray, out_deg: np.ndarray, in_deg: np.ndarray,
+                    square: np.ndarray, n_events: int, key: np.ndarray):
+    """Links (box, src, dst, square) joining a box's two events at one lattice point where its links break.
+
+    F = 0 at a lattice point P is an event on each lattice line through P
+    that F crosses there, each put in a cell beside P (its ``side``); the
+    face square holding both pairs them with a link of length zero.  Where
+    that square is missing from the box's boundary (it faces a cell with
+    no surface inside, pruned, against a larger leaf: the y-axis on
+    ``x y^5 + z^5 + ...``, fuzz s6-601) the box's cycle stops at one event
+    of P and starts again at the other.  Where a box has exactly one event
+    with no link out and one with no link in at the same vertex key, the
+    missing link joins them, from the first to the second, in the square
+    of the link arriving at the first.
+    """
+    gap = in_deg - out_deg
+    loose = np.flatnonzero((np.abs(gap) == 1) & (np.maximum(in_deg, out_deg) == 1))
+    empty = np.zeros(0, np.int64)
+    if len(loose) == 0:
+        return empty, empty, empty, empty
+    lbox, lev = nodes[loose] // n_events, nodes[loose] % n_events
+    order = lexsort((gap[loose], key[lev], lbox))
+    loose, lbox, lev = loose[order], lbox[order], lev[order]
+    same = (lbox[1:] == lbox[:-1]) & (key[lev[1:]] == key[lev[:-1]])
+    # Neighbours in this order at one (box, key), no third there: the one
+    # with no link in (gap -1) first.
+    alone = np.ones(len(loose) - 1, bool) if len(loose) > 1 else np.zeros(0, bool)
+    if len(alone) > 1:
+        alone[1:] &= ~same[:-1]
+        alone[:-1] &= ~same[1:]
+    pair = np.flatnonzero(same & alone & (gap[loose[:-1]] == -1) & (gap[loose[1:]] == 1))
+    start, end = loose[pair], loose[pair + 1]  # no link in; no link out
+    # The square of the link arriving at ``end``.
+    arrive = np.full(len(nodes), -1, np.int64)
+    arrive[b] = square
+    return lbox[pair], nodes[end] % n_events, nodes[start] % n_events, arrive[end]
 
 
 def lens_leaves(cycles: Cycles, level: np.ndarray, fine_level: int, on_box_edge: np.ndarray) -> np.ndarray:

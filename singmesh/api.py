@@ -353,7 +353,7 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         if len(curves.points):
             group[tube_leaves(tree, links, curves)] = tube_id
         grouped = box_links(links, group)
-        cycles = find_cycles(*grouped, n_events=len(events.key))
+        cycles = find_cycles(*grouped, n_events=len(events.key), key=events.key)
         # A node just inside a face of the box: the links there may join its
         # two branches into one cycle.
         cycles = part_branches(cycles, events, links, tree, stars, points)

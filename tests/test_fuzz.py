@@ -1348,14 +1348,16 @@ OPEN_CASES = [
              "cells inside the face x = -1"),
     (6, 570, "a quadric cone (apex at the origin) times a cubic: 4 open edges and 23 edges of three "
              "triangles by the double curve at (-0.16, 0.08, -0.12), 0.2 from the apex"),
-    (6, 601, "a smooth surface but for a corank-3 point at the origin (3-jet 0) with the y-axis, a lattice "
-             "line, on the surface through it: the point is reported with no vertex and no branches and 70 "
-             "open edges lie on the faces of its star region (x, z = +-0.125); the star's cone over its "
-             "boundary is not built (facets/stars.py), not found why"),
+    (6, 601, "a smooth surface but for a corank-3 point at the origin (3-jet 0) on the y-axis, a lattice "
+             "line in the surface: its star's cycles are joined at the axis's lattice points now "
+             "(facets.cycles._corner_bridges; the point is a vertex), but 4 open edges at (0, 0.21, 0) remain: "
+             "the sheet x ~ -c z^5 hugs the lattice plane x = 0 along the axis, and the events at the axis's "
+             "lattice points lie in the cells x < 0, z > 0 only, while the sheet lies in x > 0, z < 0 too"),
     (6, 710, "the plane z = 4/15 times a cubic: 4 open edges and 19 edges of three triangles in that "
              "plane (the double curve), the first open one at (-1.02, 0.03, 0.27)"),
-    (7, 192, "as s6-601: a corank-3 point at the origin with the y- and z-axes, lattice lines, on the surface "
-             "through it: no vertex, no branches, 149 open edges on its star region's faces"),
+    (7, 192, "a corank-3 point at the origin with the y- and z-axes, lattice lines, on the surface: its "
+             "star is closed now (facets.cycles._corner_bridges), but one vertex 5.9e-5 from the point lies "
+             "3e-6 off the plane z = 0 (on y = 0, F = x^5 z / 2; |grad F| 5e-22 there)"),
     (7, 422, "the cubic -8 y^3 + ... + 4 x^2 + 1 touches the face y = 0.5 at (0, 0.5, 0) (its double curve "
              "with the plane z = 0 ends there): two vertices 4.7e-6 and 1e-3 outside the box, polygon "
              "centres projected along grad F across the face (facets/triangulate.py), not held in it; projecting "
