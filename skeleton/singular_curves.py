@@ -1729,7 +1729,14 @@ def _pieces(surface, box, P, E, cross, names, sheets, arcs, step) -> CurveSet:
         verts = path[:-1] if closed else path
         inner = [v for v in verts if v not in special] or verts
         kinds = [names[v] for v in inner]
-        name = max(set(kinds), key=kinds.count)
+        # The most common kind; a tie (a piece of two vertices read two
+        # ways) goes to the kind with more arcs, whose tube holds all the
+        # sheets, then by name: not by the set's order, which changes with
+        # PYTHONHASHSEED (fuzz s4-746 came out two ways).
+        most_arcs = {}
+        for v, k in zip(inner, kinds):
+            most_arcs[k] = max(most_arcs.get(k, 0), int(arcs[v]))
+        name = max(most_arcs, key=lambda k: (kinds.count(k), most_arcs[k], k))
         s = int(np.median([sheets[v] for v in inner]))
         half = int(np.median([arcs[v] for v in inner]))
         ends = (-1, -1) if closed else (sp_index.get(path[0], -1), sp_index.get(path[-1], -1))
