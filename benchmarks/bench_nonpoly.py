@@ -42,6 +42,7 @@ H = "1/(1+exp(-20*({})))"
 F1 = "(0.36-((x-0.5)^2+y^2+z^2))"
 G1 = "(0.36-((x+0.5)^2+y^2+z^2))"
 B15 = ((-1.5, 1.5),) * 3
+B2 = ((-2.0, 2.0),) * 3
 PERIOD = ((-3.0, 3.3),) * 3
 
 #: name, equation, box
@@ -63,6 +64,14 @@ SURFACES = [
     # edges: 12.8 and 6.4 fine cells at 256; the second raises fine to 512
     ("cube-hole-0.1", "Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, 0.6 - sqrt(x^2+y^2))", ((-1.0, 1.0),) * 3),
     ("cube-hole-0.05", "Max(Max(Abs(x), Abs(y), Abs(z)) - 0.7, 0.65 - sqrt(x^2+y^2))", ((-1.0, 1.0),) * 3),
+    # poles inside the box (tests/test_nonpoly.py's POLE_CASES): boxes a pole
+    # plane crosses are excluded by the numerator of F = N / D
+    ("pole-tan-tan", "tan(2x)+tan(2y)-z", B2),
+    ("pole-tan-tan-rotated", "tan(2.03456789012345*(0.965925826289068 x - 0.258819045102521 y - 0.0123456789012))"
+     " + tan(1.97654321098765*(0.258819045102521 x + 0.965925826289068 y + 0.0234567890123)) - z", B2),
+    ("pole-csc-csc", "1/sin(3x) + 1/sin(3y) - z", B2),
+    ("pole-x-tan-float", "0.912345678901234 x tan(3.04567890123456 (y - 0.0345678901234)) - z", B2),
+    ("pole-sec-float", "1/cos(2.1234567890123 x) + 0.9876543210987 y - z", B2),
 ]
 
 TORUS_POLY = "(x^2+y^2+z^2+0.64-0.09)^2 - 2.56(x^2+y^2)"

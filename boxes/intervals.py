@@ -417,6 +417,49 @@ class Graph:
                 done[n] = self.node(op, new_args, p)
         return done[root]
 
+    def fraction(self, root: int) -> tuple[int, int]:
+        """Nodes (N, D) with F = N / D wherever F (node ``root``) and all its subexpressions are finite.
+
+        Built bottom-up: a quotient or a negative power puts its divisor in
+        D, tan(a) is sin(a) / cos(a), sums and products combine the
+        fractions of their operands; every other node (exp, sqrt, Min, ...)
+        is its own numerator over 1.  Where every subexpression of F is
+        finite at a point, every factor of D is nonzero and finite there
+        (cos(a) != 0 where tan(a) is finite, a divisor's numerator != 0
+        where the quotient is), so F = 0 there implies N = 0: bounds of N
+        of one sign on a box exclude F's zeros from it, also on boxes a
+        pole crosses, where F's own bounds are infinite (N is bounded:
+        tan(2 x) + tan(2 y) - z is sin(2 x + 2 y) - z cos(2 x) cos(2 y)
+        over cos(2 x) cos(2 y)).  D is ``one`` where F has no quotient.
+        """
+        memo: dict = {}
+        for n in self.plan([root]):
+            op, args, p = self.ops[n], self.args[n], self.params[n]
+            if op in ("add", "mul"):
+                (an, ad), (bn, bd) = memo[args[0]], memo[args[1]]
+                if ad == bd == self.one:
+                    memo[n] = (n, self.one)
+                elif op == "mul":
+                    memo[n] = (self.mul(an, bn), self.mul(ad, bd))
+                elif ad == bd:
+                    memo[n] = (self.add(an, bn), ad)
+                else:
+                    memo[n] = (self.add(self.mul(an, bd), self.mul(bn, ad)), self.mul(ad, bd))
+            elif op == "neg":
+                an, ad = memo[args[0]]
+                memo[n] = (n, ad) if ad == self.one else (self.neg(an), ad)
+            elif op == "powi":
+                an, ad = memo[args[0]]
+                if p > 0:
+                    memo[n] = (n, ad) if ad == self.one else (self.powi(an, p), self.powi(ad, p))
+                else:
+                    memo[n] = (self.one if ad == self.one else self.powi(ad, -p), self.powi(an, -p))
+            elif op == "tan":
+                memo[n] = (self.node("sin", args), self.node("cos", args))
+            else:
+                memo[n] = (n, self.one)
+        return memo[root]
+
     def plan(self, outputs) -> list[int]:
         """Nodes needed for ``outputs``, in evaluation order."""
         need = set()

@@ -29,7 +29,10 @@ a box an argument is clipped to the function's domain, so the bounds are
 those of F on the part of the box where it is defined, and a box wholly
 outside the domain is empty (``excludes_zero`` is True).  Division by an
 interval holding 0 (a pole) gives infinite bounds: such boxes are never
-excluded nor simple, and a sign change of F across a pole is not a root
+simple, and are excluded only where the numerator N of F = N / D
+(:meth:`Graph.fraction`: divisors and tan's cosines in D) has one sign on
+them (without it every box a pole plane crosses went to the fine level);
+a sign change of F across a pole is not a root
 (``line_roots`` keeps only roots where |F| is at rounding level relative
 to its terms).  Where the surface runs into a pole (x / y = 0, the plane
 x = 0, meets the pole y = 0 along the line x = y = 0, where F = 0 / 0),
@@ -128,6 +131,11 @@ class ElementarySurface(Surface):
         self._poles = any(
             g.ops[n] in ("tan", "log", "atanh") or (g.ops[n] in ("powi", "powr") and g.params[n] < 0)
             for n in g.plan([self._f]))
+        # F = N / D, for the boxes a pole crosses (None: F has no quotient).
+        self._fraction = None
+        if self._poles:
+            num, den = g.fraction(self._f)
+            self._fraction = None if den == g.one else (num, den)
         s = np.linspace(-1.0, 1.0, 5)
         grid = np.stack(np.meshgrid(s, s, s, indexing="ij"), -1).reshape(-1, 3)
         mag = self.magnitude(grid)
@@ -362,7 +370,25 @@ class ElementarySurface(Surface):
         lo, hi = self.corners(data)
         flo, fhi = self._value_bounds(lo, hi)
         slack = self._slack(flo, fhi, lo, hi)
-        return (flo > slack) | (fhi < -slack) | np.isnan(flo) | np.isnan(fhi)
+        out = (flo > slack) | (fhi < -slack) | np.isnan(flo) | np.isnan(fhi)
+        pole = np.nonzero(~out & (np.isinf(flo) | np.isinf(fhi)))[0]
+        if len(pole) and self._fraction is not None:
+            out[pole] = self._fraction_excludes(lo[pole], hi[pole])
+        return out
+
+    def _fraction_excludes(self, lo, hi) -> np.ndarray:
+        """N of F = N / D (:meth:`Graph.fraction`) of one sign on the boxes: (k,) bool.
+
+        For boxes a pole crosses (F's bounds infinite): where every
+        subexpression of F is finite, F = 0 implies N = 0, so N of one sign
+        (beyond ``PRUNE_SLACK`` of its size, for rounding) leaves no zero of
+        F in the box, on either side of the pole.  Without this every box
+        a pole plane crosses was split to the finest level.
+        """
+        r = interval_eval(self._graph, [self._fraction[0]], lo, hi)
+        nlo, nhi = r.lo[0], r.hi[0]
+        slack = tol.PRUNE_SLACK * np.maximum(_finite_abs(nlo), _finite_abs(nhi))
+        return np.isfinite(nlo) & np.isfinite(nhi) & ((nlo > slack) | (nhi < -slack))
 
     def _continuous(self, lo, hi):
         """Where F is bounded on the boxes (no pole): (N,) bool."""
@@ -794,6 +820,12 @@ class ElementarySurface(Surface):
             flo, fhi = self._value_bounds(lo, hi, grad=grad)
             slack = self._slack(flo, fhi, lo, hi)
             maybe = (flo <= slack) & (fhi >= -slack)
+            # A piece across a pole: no zero where N of F = N / D has one
+            # sign (the sign change of F there is the pole's), not halved
+            # down to the smallest width on every line crossing a pole.
+            pole = np.nonzero(maybe & (np.isinf(flo) | np.isinf(fhi)))[0]
+            if len(pole) and self._fraction is not None:
+                maybe[pole] = ~self._fraction_excludes(lo[pole], hi[pole])
             row, a, b, dl, dh, clipped = row[maybe], a[maybe], b[maybe], dl[maybe], dh[maybe], clipped[maybe]
             flo, fhi = flo[maybe], fhi[maybe]
             if len(row) == 0:

@@ -433,10 +433,14 @@ def test_poles_inside_the_box(name, text, funcs, box):
     # goes on through them), no triangle crosses a pole elsewhere, its
     # vertices are on F = 0 and every point of a marching-cubes sample of
     # the closure N = 0 is near it.
-    f, n, dens, near_line = funcs
     box = np.array(box, float)
     m = singmesh.mesh(text, box, coarse=8, fine=64)
-    cell = float(np.max(box[:, 1] - box[:, 0])) / 64
+    _check_pole_mesh(m, funcs, box, float(np.max(box[:, 1] - box[:, 0])) / 64)
+
+
+def _check_pole_mesh(m, funcs, box, cell):
+    """The checks of :func:`test_poles_inside_the_box` on a mesh whose finest cell is ``cell``."""
+    f, n, dens, near_line = funcs
     V, T = m.vertices, m.faces
     assert len(T) > 200
     assert np.isfinite(V).all() and np.isfinite(m.normals).all()
@@ -459,6 +463,105 @@ def test_poles_inside_the_box(name, text, funcs, box):
         across = (d[T].min(axis=1) < 0) & (d[T].max(axis=1) > 0)
         assert near_line(V[T[across]].mean(axis=1), 2 * cell).all()
     _covers_marching_cubes(m, n, box)
+
+
+def _boxes(box, n):
+    """The n^3 boxes of a uniform grid of ``box`` as an ElementarySurface's box data (k, 4, 3)."""
+    t = np.arange(n) / n
+    lo = np.stack(np.meshgrid(t, t, t, indexing="ij"), -1).reshape(-1, 3)
+    data = np.empty((len(lo), 4, 3))
+    data[:, 0], data[:, 1] = lo, lo + 1.0 / n
+    data[:, 2], data[:, 3] = np.array(box, float)[:, 0], np.array(box, float)[:, 1]
+    return data
+
+
+def _roots_in_boxes(f, lo, hi, k=9):
+    """Whether F has a zero in each box [lo, hi]: a sign change between neighbours of a k^3 grid
+    along each axis, bisected to a point where |F| is small (a pole between them is no zero)."""
+    t = np.linspace(0.0, 1.0, k)
+    grid = np.stack(np.meshgrid(t, t, t, indexing="ij"), -1)
+    found = np.zeros(len(lo), bool)
+    for axis in range(3):
+        g0 = np.take(grid, np.arange(k - 1), axis=axis)
+        g1 = np.take(grid, np.arange(1, k), axis=axis)
+        p0 = (lo[:, None] + g0.reshape(1, -1, 3) * (hi - lo)[:, None]).reshape(-1, 3)
+        p1 = (lo[:, None] + g1.reshape(1, -1, 3) * (hi - lo)[:, None]).reshape(-1, 3)
+        with np.errstate(all="ignore"):
+            f0, f1 = f(*p0.T), f(*p1.T)
+        change = np.isfinite(f0) & np.isfinite(f1) & ((f0 < 0) != (f1 < 0))
+        i = np.nonzero(change)[0]
+        a, b, fa = p0[i], p1[i], f0[i]
+        for _ in range(60):
+            c = 0.5 * (a + b)
+            with np.errstate(all="ignore"):
+                fc = f(*c.T)
+            left = (fc < 0) == (fa < 0)
+            a = np.where(left[:, None], c, a)
+            b = np.where(left[:, None], b, c)
+            fa = np.where(left, fc, fa)
+        with np.errstate(all="ignore"):
+            root = np.abs(f(*(0.5 * (a + b)).T)) <= 1e-6
+        found[i[root] // ((k - 1) * k * k)] = True
+    return found
+
+
+def test_boxes_across_a_pole_away_from_the_surface_are_excluded():
+    # Issue #10: interval bounds of F are infinite on every box a pole
+    # plane crosses, so none was ever excluded and all were split to the
+    # finest level (tan-tan at the defaults took 13 s, 56 s rotated).  Of
+    # the 32^3 boxes of B2 a pole plane of tan(a1 u) or tan(a2 v) crosses,
+    # those the closure N = 0 keeps off by a Lipschitz bound (|N| on a 5^3
+    # grid of the box above |grad N| times half its diagonal) hold no zero
+    # of F: most are excluded now (none on main), and no box with a zero
+    # of F (found by bisection along lines of a 9^3 grid) is.
+    from singmesh.elementary import ElementarySurface
+
+    a1, a2 = _A1, _A2
+    text = f"tan({a1}*({_C} x - {_S} y - {_TX})) + tan({a2}*({_S} x + {_C} y + {_TY})) - z"
+    f, n, dens, _ = _tan_tan(a1, a2, True)
+    s = ElementarySurface.parse(text)
+    data = _boxes(B2, 32)
+    lo, hi = s.corners(data)
+    excluded = s.excludes_zero(data)
+    # a pole plane crosses: a denominator of both signs at the box's corners (u, v linear in x, y)
+    corners = lo[:, None] + _OFFSETS_01[None] * (hi - lo)[:, None]
+    d = np.stack([np.stack(dens(*c.T)) for c in corners.transpose(1, 0, 2)], -1)  # (2, k, 8)
+    across = ((d.min(axis=-1) < 0) & (d.max(axis=-1) > 0)).any(axis=0)
+    t = np.linspace(0.0, 1.0, 5)
+    grid = np.stack(np.meshgrid(t, t, t, indexing="ij"), -1).reshape(-1, 3)
+    pts = lo[:, None] + grid[None] * (hi - lo)[:, None]
+    lip = 3.0 * (a1 + a2) + 1.0           # |dN/dp|, |dN/dq| <= 1 + |z| <= 3, |dp/dx|, |dp/dy| <= a1, ...
+    half_diag = 0.5 * np.linalg.norm(hi - lo, axis=1) / 4  # a point is within a quarter step of the grid
+    no_zero = np.abs(n(*pts.reshape(-1, 3).T)).reshape(len(lo), -1).min(axis=1) > lip * half_diag
+    assert across.sum() > 1000 and (across & no_zero).sum() > 0.5 * across.sum()
+    assert (excluded & across & no_zero).sum() >= 0.9 * (across & no_zero).sum()
+    new = np.nonzero(excluded & across)[0]
+    assert not _roots_in_boxes(f, lo[new], hi[new]).any()
+
+
+_OFFSETS_01 = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T.astype(float)
+
+
+def test_tan_tan_at_the_defaults_splits_only_beside_the_pole_lines():
+    # Issue #10: tan-tan rotated at the defaults (coarse 32, fine 256) took
+    # 56 s on main, 376234 leaves, most at the finest level all along the
+    # pole planes.  The same checks as test_poles_inside_the_box, and the
+    # finest level only beside the pole lines: at most 64 boxes per finest
+    # cell of their length (main: 360 thousand in all).
+    name, text, funcs, box = POLE_CASES[1]
+    box = np.array(box, float)
+    m = singmesh.mesh(text, box)
+    cell = float(np.max(box[:, 1] - box[:, 0])) / 256
+    _check_pole_mesh(m, funcs, box, cell)
+    # the pole lines crossing the box: a1 u, a2 v both in pi / 2 + pi Z for (x, y) in B2
+    c, sn = float(_C), float(_S)
+    k = np.arange(-3, 4)
+    u, v = [a.ravel() for a in np.meshgrid((np.pi / 2 + np.pi * k) / _A1, (np.pi / 2 + np.pi * k) / _A2)]
+    u, v = u + float(_TX), v - float(_TY)
+    x, y = c * u + sn * v, -sn * u + c * v      # (u, v) = rotation of (x, y), shifted
+    lines = int(((np.abs(x) <= 2) & (np.abs(y) <= 2)).sum())
+    assert lines >= 1
+    assert m.stats["levels"][-1] <= 64 * 256 * lines
 
 
 def _covers_marching_cubes(m, f, box, n=96):
