@@ -482,6 +482,10 @@ class Mesh:
         if denominator:
             out.append(f"F is a fraction N / D with D = {denominator}: the mesh is of N = 0, the closure of "
                        "F = 0 (where D = 0 on it, F itself is undefined)")
+        removable = getattr(self.surface, "removable", "")
+        if removable:
+            out.append(f"F is 0/0 where {removable} = 0 (a factor of both its numerator and denominator): "
+                       f"the mesh there is of its limit, F with the factor cancelled, {self.surface.expr} = 0")
         bad = self.curve_edges_short_of_sheets()
         if bad:
             out.append(f"{bad} edge(s) of the singular curves have another number of triangles than their "

@@ -40,7 +40,7 @@ def squarefree(surface: Surface) -> tuple[Surface, list[tuple[str, int]]]:
                                            surface.rounding)
     return PolynomialSurface(text=surface.text, expr=reduced.expr, coeffs=reduced.coeffs, degree=reduced.degree,
                              params=surface.params, rounding=surface.rounding,
-                             denominator=surface.denominator), repeated
+                             denominator=surface.denominator, removable=surface.removable), repeated
 
 
 @lru_cache(maxsize=64)

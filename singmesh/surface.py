@@ -264,6 +264,18 @@ class Surface(abc.ABC):
                 pass  # N over the degree limit: the interval path, as any F
             else:
                 return replace(surface, denominator=str(fraction[1]))
+        else:
+            limit = removable_fraction(expr)
+            if limit is not None:
+                # F = P D / D: 0 / 0 on D = 0, where its limit is P's value
+                # (what a user means by (x^2 - y^2) / (x - y)); P = 0 is
+                # meshed, D named in the report's notes.
+                try:
+                    surface = PolynomialSurface._from_expr(limit[0], text, values, rounding)
+                except SurfaceError:
+                    pass  # P constant or over the degree limit: refused as a removable singularity
+                else:
+                    return replace(surface, removable=str(limit[1]))
         # sqrt, abs, Min/Max, exp, trig ...: interval bounds and Taylor jets
         # of the expression tree instead of Bernstein tensors.
         from .elementary import ElementarySurface
@@ -564,6 +576,8 @@ class PolynomialSurface(Surface):
     rounding: float = float(np.finfo(float).eps)
     #: For a rational F = N / D: D (the surface is N = 0), else "".
     denominator: str = ""
+    #: For a rational F = P D / D: D (F is 0 / 0 on D = 0; the surface is P = 0, its limit), else "".
+    removable: str = ""
 
     is_polynomial = True
 
@@ -908,6 +922,30 @@ def polynomial_fraction(expr: sympy.Expr):
     if not den.free_symbols:
         return None
     return num, den
+
+
+def removable_fraction(expr: sympy.Expr):
+    """(P, D) for a rational F = N / D whose denominator cancels entirely (N = P D, P a polynomial); else None.
+
+    F is 0 / 0 on D = 0 and equals P elsewhere: P is its continuous
+    extension.  (The parser reads decimals exactly, so a factor typed
+    with 15-digit coefficients cancels exactly too.)
+    """
+    if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
+        return None
+    # (the divisors as written: sympy's together may already cancel them)
+    divisors = list(dict.fromkeys(node.base for node in sympy.preorder_traversal(expr)
+                                  if isinstance(node, sympy.Pow) and node.exp.is_negative
+                                  and node.base.free_symbols))
+    if not divisors:
+        return None
+    try:
+        p, q = sympy.fraction(sympy.cancel(sympy.together(expr)))
+    except (TypeError, ValueError, sympy.PolynomialError):  # pragma: no cover - sympy cannot combine it
+        return None
+    if q.free_symbols:
+        return None
+    return sympy.expand(p / q), sympy.Mul(*divisors)
 
 
 def _is_polynomial(expr: sympy.Expr) -> bool:

@@ -592,6 +592,43 @@ def _covers_marching_cubes(m, f, box, n=96):
     assert (d <= 0.5 * longest[inside] + 2 * h.max()).all()
 
 
+_U = f"({_C} x - {_S} y - {_TX})"
+_V = f"({_S} x + {_C} y + {_TY})"
+
+
+@pytest.mark.parametrize("text, limit, chi", [
+    # (u^2 - v^2) / (u - v) - z: the plane u + v = z, 0/0 on the plane u = v
+    (f"({_U}^2 - {_V}^2)/({_U} - {_V}) - z", lambda u, v, x, y, z: u + v - z, None),
+    # a sphere times u - v over u - v: closed, 0/0 on the great circle u = v
+    (f"((x^2 + y^2 + z^2 - 0.81234567890123)*{_U} - (x^2 + y^2 + z^2 - 0.81234567890123)*{_V})/({_U} - {_V})",
+     lambda u, v, x, y, z: x * x + y * y + z * z - 0.81234567890123, 2),
+])
+def test_rational_removable_singularity_is_meshed_as_its_limit(text, limit, chi):
+    # Issue #10: a rational F whose denominator cancels entirely (P D / D)
+    # was refused on main ("0/0 where ... = 0: a removable singularity");
+    # a user means P, its limit.  Float-rotated and shifted, 15 digits.
+    # Checked from the faces: vertices on P = 0, closed up to the box (no
+    # gap along u = v: triangles cross it), Euler characteristic, and
+    # every point of a marching-cubes sample of P = 0 near the mesh.
+    def p(x, y, z):
+        u, v = _rot_uv(x, y)
+        return limit(u, v, x, y, z)
+
+    box = np.array(B2, float)
+    m = singmesh.mesh(text, box, coarse=8, fine=32)
+    V, T = m.vertices, m.faces
+    assert len(T) > 50 and np.isfinite(V).all()
+    assert (np.abs(p(*V.T)) / np.linalg.norm(_grad(p, V), axis=1)).max() <= 1e-10 * 4.0
+    assert mc.boundary_edges_off_box(V, T, box) == [] and mc.non_manifold_edges(T) == []
+    if chi is not None:
+        assert mc.euler(V, T) == chi and mc.components(T) == 1
+    u, v = _rot_uv(V[:, 0], V[:, 1])
+    d = (u - v)[T]
+    assert ((d.min(axis=1) < 0) & (d.max(axis=1) > 0)).sum() >= 4
+    assert any("0/0" in note for note in m.notes())
+    _covers_marching_cubes(m, p, box, n=64)
+
+
 def test_inverse_square_sphere():
     # 1/r^2 - 1 = 0 is the unit sphere; the pole at the centre is inside.
     m = singmesh.mesh("1/(x^2+y^2+z^2) - 1", B15)
