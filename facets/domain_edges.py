@@ -3,7 +3,9 @@
 Where the surface runs out of F's domain with F finite there (sqrt(1 - x^2
 - y^2) - z - 0.2 at x^2 + y^2 = 1: the root goes to 0), its boundary is the
 curve C on which F with the root replaced by 0 (``G1``) and the root's
-argument (``G2``) both vanish.  The boxes across that end have no cycles
+argument (``G2``) both vanish (asin, acos, acosh at the ends of their
+domain the same way: F with the function replaced by its value there, and
+the argument's distance to the end).  The boxes across that end have no cycles
 (F is undefined on part of their faces), so the mesh stops up to a cell
 short of C, open there.  The open edges next to it, chained as the mesh's
 boundary runs, get a strip up to C: each chain vertex moved onto C by
@@ -29,8 +31,11 @@ from singmesh.facets.tubes import faces_of
 def _oriented_boundary(faces: np.ndarray) -> np.ndarray:
     """(k, 2) edges a -> b of one triangle each, as that triangle has them."""
     directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    key = np.sort(directed, axis=1)
-    _, inverse, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    key = np.sort(directed, axis=1).astype(np.int64)
+    # One int64 per undirected edge: np.unique on rows (axis=0) cost a
+    # second on the 200k-vertex meshes of asin's domain, now a domain edge.
+    key = key[:, 0] * (int(faces.max()) + 1) + key[:, 1]
+    _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
     return directed[count[inverse.reshape(-1)] == 1]
 
 

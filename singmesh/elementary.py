@@ -606,7 +606,9 @@ class ElementarySurface(Surface):
 
     def domain_edge_systems(self) -> list[CreaseSystem]:
         """A root sqrt(u) or u^p (0 < p < 1) of F, u not a sum of squares nor |v| or v^2: where u = 0 on the
-        surface it ends, F finite there.  (G1, G2) = (F with the root replaced by 0, u) each."""
+        surface it ends, F finite there.  (G1, G2) = (F with the root replaced by 0, u) each.  Likewise
+        asin(u) and acos(u) at u = +-1, acosh(u) at u = 1: (F with the function replaced by its value
+        there, 1 -+ u or u - 1)."""
         if getattr(self, "_domain_edge_systems", None) is None:
             g, f = self._graph, self._f
             plan = g.plan([f])
@@ -614,6 +616,17 @@ class ElementarySurface(Surface):
             out = []
             for n in plan:
                 op, p = g.ops[n], g.params[n]
+                if op in _FINITE_ENDS:
+                    # asin, acos, acosh end with a square-root behaviour and
+                    # a finite value at the ends of their domain, as sqrt.
+                    a = g.args[n][0]
+                    for end, value, side in _FINITE_ENDS[op]:
+                        lo, hi = np.nextafter(value, -np.inf), np.nextafter(value, np.inf)
+                        c = g.const(value, lo if value else value, hi if value else value)
+                        # G2 = 1 - a, 1 + a or a - 1: zero at the end, >= 0 inside
+                        g2 = g.sub(g.const(float(end)), a) if side > 0 else g.sub(a, g.const(float(end)))
+                        out.append(_Kink(self, "domain edge", g.substitute(f, n, c), g2, None, (), "pole"))
+                    continue
                 if n in rfun_roots or not (op == "sqrt" or (op == "powr" and 0.0 < float(p) < 1.0)):
                     continue
                 a = g.args[n][0]
@@ -968,6 +981,13 @@ class ElementarySurface(Surface):
             with np.errstate(invalid="ignore"):
                 good &= np.abs(fv) <= np.fmax(np.abs(fl), np.abs(fr))
         return x, good
+
+
+#: Functions with a finite value at an end of their domain, approached as a
+#: square root: op -> (end, value there, +1 if the domain is below the end).
+_FINITE_ENDS = {"asin": ((1.0, np.pi / 2, 1), (-1.0, -np.pi / 2, -1)),
+                "acos": ((1.0, 0.0, 1), (-1.0, np.pi, -1)),
+                "acosh": ((1.0, 0.0, -1),)}
 
 
 def _domain_conditions(expr: sympy.Expr):

@@ -266,3 +266,45 @@ def test_mesh_reaches_the_domain_edge(rotated):
     assert 2 * np.pi * (1 - 1e-3) <= length <= 2 * np.pi
     notes = [n for n in said if "out of its domain" in n]
     assert len(notes) == 1 and "the mesh ends there, open along" in notes[0]
+
+
+@pytest.mark.parametrize("rotated", [False, True])
+# w where the surface meets the domain's end u^2 + v^2 = 1: the function's value there, less 0.3
+@pytest.mark.parametrize("fn, end", [("asin", np.pi / 2 - 0.3), ("acos", -0.3), ("acosh", -0.3)])
+def test_mesh_reaches_the_end_of_asin_acos_acosh(fn, end, rotated):
+    # asin(u^2 + v^2) - w - 0.3 (and acos, and acosh(2 - u^2 - v^2)) is
+    # defined for u^2 + v^2 <= 1 only, and finite there: the surface ends
+    # on the circle u^2 + v^2 = 1, w = asin(1) - 0.3 (acos(1) - 0.3,
+    # acosh(1) - 0.3).  On main the mesh stopped up to a cell short of it
+    # (172 open edges up to 0.019 below it): only sqrt's ends had strips.
+    # Checked from the faces as test_mesh_reaches_the_domain_edge.
+    if rotated:
+        (u, v, w), rot = _rotated(7)
+    else:
+        u, v, w, rot = "x", "y", "z", lambda x, y, z: np.stack([x, y, z])
+    arg = f"2 - {u}^2 - {v}^2" if fn == "acosh" else f"{u}^2 + {v}^2"
+    text = f"{fn}({arg}) - {w} - 0.3"
+    box = np.array(((-1.5, 1.5),) * 3)
+    m, said = _mesh(text, box=box, coarse=16, fine=64)
+    V, T = m.vertices, m.faces
+    assert np.isfinite(V).all() and np.isfinite(m.normals).all() and len(T) > 1000
+    a, b, c = rot(*V.T)
+    r2 = a * a + b * b
+    assert r2.max() <= 1 + 1e-12                   # in the domain, to the rotation's rounding
+    r2 = np.minimum(r2, 1.0)
+    with np.errstate(divide="ignore"):
+        if fn == "asin":
+            f, d = np.arcsin(r2), 1 / np.sqrt(1 - r2 * r2)
+        elif fn == "acos":
+            f, d = np.arccos(r2), 1 / np.sqrt(1 - r2 * r2)
+        else:
+            f, d = np.arccosh(2 - r2), 1 / np.sqrt((2 - r2) ** 2 - 1)
+    f = f - c - 0.3
+    g = np.hypot(2 * np.sqrt(r2) * d, 1.0)         # |grad F| (inf at the end: |F| there is checked as is)
+    assert (np.abs(f) / np.where(np.isfinite(g), g, 1.0)).max() <= 1e-10 * 3
+    assert mc.non_manifold_edges(T) == [] and mc.euler(V, T) == 1 and mc.components(T) == 1
+    open_ = np.array(mc.boundary_edges_off_box(V, T, box), np.int64).reshape(-1, 2)
+    a, b, c = rot(*V[open_.ravel()].T)
+    assert len(open_) and np.hypot(np.hypot(a, b) - 1, c - end).max() <= 1e-9
+    length = np.linalg.norm(V[open_[:, 0]] - V[open_[:, 1]], axis=1).sum()
+    assert 2 * np.pi * (1 - 1e-3) <= length <= 2 * np.pi
