@@ -66,6 +66,10 @@ class Events:
     lines: np.ndarray
     line_keys: np.ndarray
 
+    def lattice(self) -> np.ndarray:
+        """(E, 3) float64: lattice coordinates of the events (the line's two fixed ones exact)."""
+        return _line_xyz(self.lines[self.line], self.pos)
+
     def on_segments(self, axis, u, v, start, end):
         """Events on axis-parallel lattice segments ``[start, end)``.
 

@@ -180,38 +180,60 @@ def _corner_bridges(nodes: np.ndarray, a: np.ndarray, b: np.ndarray, out_deg: np
     return lbox[pair], nodes[end] % n_events, nodes[start] % n_events, arrive[end]
 
 
-def lens_leaves(cycles: Cycles, level: np.ndarray, fine_level: int, on_box_edge: np.ndarray) -> np.ndarray:
-    """Leaves above the fine level holding a lens cut off by an edge of the box.
+def lens_leaves(cycles: Cycles, level: np.ndarray, corner: np.ndarray, fine_level: int,
+                lattice: np.ndarray, on_box: np.ndarray, snapped: np.ndarray) -> np.ndarray:
+    """Leaves above the fine level holding a piece of surface cut off by the box's boundary
+    that no polygon stands for.
 
-    A piece of surface that meets one edge of a leaf twice and no other
-    edge is a cycle of two events, which bounds no polygon.  Inside the
-    box its two links are edges of the neighbours' polygons across the
-    two faces, and the mesh only cuts the bulge short.  On an edge of the
-    box there are no such neighbours: the whole piece (a sliver cut off by
-    the box's edge) is dropped without a word.  Such a leaf is to be
-    split: its children see the sliver on more edges.
+    A cycle whose events all lie on one face of its leaf has its polygon
+    in that face (or none: two events on one edge), while the piece of
+    surface it bounds bulges into the leaf, meeting no edge off that face.
+    Inside the box the neighbours' polygons across the face cover the
+    piece up to the bulge, and those bulges are many and shallow (Barth's
+    sextic, the half ball), left as they are.  Where the piece meets the
+    box's boundary there are no such neighbours there: a sliver cut off by
+    an edge of the box (fuzz s4-26, 25 cells long), a cap cut off by a face
+    of the box across one leaf edge (s3-905: 6 cells across, in two coarse
+    leaves each with two events on their shared edge) is dropped without a
+    word, or cut short by up to the leaf's width where a neighbour is
+    finer (s4-141, 6 cells).  Such a leaf is to be split: its children see
+    the piece on more edges.  A cycle of lattice points alone is not such
+    a piece but a line of the surface along a lattice line (the x-axis of
+    the D4 y x^2 - y^3 - z^2, which the sheet touches): split, the leaf's
+    children see it the same way.
 
     Parameters
     ----------
     cycles : Cycles
     level : (N,) int64
         Level of every leaf; box ids from ``N`` on (stars, tubes) are not leaves.
+    corner : (N, 3) int64
+        Lower corner of every leaf (lattice units).
     fine_level : int
-    on_box_edge : (E,) bool
-        Per event: whether it lies on an edge of the box (two coordinates
-        at the box's bounds).
+    lattice : (E, 3) float64
+        Lattice coordinates of the events (:meth:`Events.lattice`; the two
+        of a lattice line exact integers).
+    on_box : (E,) bool
+        Per event: whether it lies on a face of the box.
+    snapped : (E,) bool
+        Per event: whether it is a lattice point.
 
     Returns
     -------
     (K,) int64
         Sorted leaf indices.
     """
-    count = np.diff(cycles.offsets)
-    short = np.flatnonzero(count < 3)
-    # All of a short cycle's events on the box's edges (np.minimum.reduceat
-    # over the cycles' runs; the runs of short cycles are 1 or 2 long).
-    all_on = np.minimum.reduceat(on_box_edge[cycles.events].astype(np.int8), cycles.offsets[:-1])[short] \
-        if len(short) else np.zeros(0, np.int8)
-    box = cycles.box[short][all_on.astype(bool)]
-    box = box[box < len(level)]
-    return np.unique(box[level[box] < fine_level])
+    if len(cycles) == 0:
+        return np.zeros(0, np.int64)
+    runs = cycles.offsets[:-1]
+    box = np.repeat(cycles.box, np.diff(cycles.offsets))
+    b = np.where(box < len(level), box, 0)
+    lo = corner[b].astype(float)
+    hi = lo + np.left_shift(1, fine_level - level[b])[:, None].astype(float)
+    p = lattice[cycles.events]
+    on_face = np.concatenate([p == lo, p == hi], axis=1)  # (S, 6): on each face of its leaf
+    flat = np.logical_and.reduceat(on_face, runs, axis=0).any(axis=1)
+    touches = np.logical_or.reduceat(on_box[cycles.events], runs)
+    lattice_only = np.logical_and.reduceat(snapped[cycles.events], runs)
+    out = cycles.box[flat & touches & ~lattice_only & (cycles.box < len(level))]
+    return np.unique(out[level[out] < fine_level])

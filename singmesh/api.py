@@ -364,11 +364,14 @@ def _mesh(surface, box, coarse: int, fine: int, improve: bool, params: dict,
         if not few or attempt == tol.STAR_RETRIES:
             break
         cubes = shrink_cubes(first, cubes, centres, few)
-    # A sliver of surface cut off by an edge of the box in a coarse leaf
-    # has a cycle of two events and no polygon: it would be dropped without
-    # a word (fuzz s4-26, 25 cells long).  Those leaves are split to the
-    # fine level, once, where the sliver meets more edges.
-    lens = lens_leaves(cycles, tree.level, fine_level, topology.on_box_edge(events.point, b, tol.STAR_ON_BOX))
+    # A piece of surface cut off by the box's boundary in a coarse leaf
+    # whose cycle's events all lie on one face of the leaf has no polygon
+    # but a flat one: a sliver at an edge of the box (fuzz s4-26, 25 cells
+    # long), a cap through a face of the box (s3-905, 6 cells across) is
+    # dropped or cut short (facets/cycles.py lens_leaves).  Those leaves
+    # are split to the fine level, once, where the piece meets more edges.
+    lens = lens_leaves(cycles, tree.level, tree.corner, fine_level, events.lattice(),
+                       topology.on_box_boundary(events.point, b, tol.STAR_ON_BOX), events.snapped)
     if len(lens) and lenses is None:
         lo = tree.lattice_to_space(tree.corner[lens])
         hi = tree.lattice_to_space(tree.corner[lens] + tree.size[lens, None])
