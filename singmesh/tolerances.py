@@ -192,8 +192,13 @@ CREASE_MIN_GAP = 12.0
 #: triangles and open edges between them); at 1.1 to 1.4 cells (s3-474,
 #: s4-530 turned) they are not, and two traces 4.5 cells apart (s4-410,
 #: clean at 64 by luck) are 9 apart at 128 and still share a tube there
-#: (edges of six): one level does not part everything, more was not tried
-#: for want of time (at 256 s4-410 is clean, s4-530 is not).
+#: (edges of six): one level does not part everything (at 256 s4-410 is
+#: clean, s4-530 is not).  Two levels
+#: where one leaves them under 10 cells (gaps of 2.5 to 5 cells at fine 64)
+#: were tried (open12, 318f1c3): s3-350, s4-410, s6-570, s6-710 and a plane
+#: through a two-sheeted hyperboloid's axis came out clean, but s3-950 (3.2
+#: cells: an edge of six triangles at 256) and the Seepferdchen's cuspidal
+#: edge (open edges) broke: not kept (test_branches_a_few_cells_apart_get_tubes_of_their_own).
 CURVE_GAP_MAX_RAISE = 1
 CURVE_GAP_LEAST = 2.0
 
