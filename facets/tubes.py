@@ -85,14 +85,14 @@ def tube_regions(box: np.ndarray, fine_level: int, curves) -> np.ndarray:
     return np.concatenate([
         _block_regions(box, fine_level, curves.points, curves.edges[~wide], pad=tol.CURVE_TUBE_GROW + 2),
         _block_regions(box, fine_level, curves.points, curves.edges[wide],
-                       pad=tangent_radius(curves) + tol.CURVE_TUBE_GROW + 2),
+                       pad=tangent_radius(curves) + tol.CURVE_TUBE_GROW + 2, also=wide_vertices(curves)),
         np.stack([b - reach, b + reach], axis=1), np.stack([m - meet_reach, m + meet_reach], axis=1)])
 
 
 def tube_leaves(tree: Octree, links, curves) -> np.ndarray:
     """Which leaves form the tube around the curves of a CurveSet: (N,) bool."""
     return _tube_leaves(tree, links, curves.points, curves.edges, balls(curves), tangent_edges(curves),
-                        tangent_radius(curves), balls(curves, MEET_KINDS))
+                        tangent_radius(curves), balls(curves, MEET_KINDS), wide_vertices(curves))
 
 
 def tube_triangles(grouped, links, events, curves, tube_id: int, key0: int, cell: float, box: np.ndarray,
@@ -257,7 +257,7 @@ def face_chords(rail_list, points: np.ndarray, far: np.ndarray, end_points: np.n
 
 
 def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.ndarray:
-    """Points along the curve graph's edges at most ``spacing`` apart."""
+    """Points along the curve graph's edges at most ``spacing`` apart, and all its points."""
     if len(edges) == 0:
         return np.asarray(points, float).reshape(-1, 3)
     a, b = points[edges[:, 0]], points[edges[:, 1]]
@@ -265,6 +265,48 @@ def curve_samples(points: np.ndarray, edges: np.ndarray, spacing: float) -> np.n
     owner = np.repeat(np.arange(len(edges)), n)
     t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
     return np.vstack([a[owner] + t[:, None] * (b - a)[owner], points])
+
+
+def edge_samples(points: np.ndarray, edges: np.ndarray, spacing: float, also: np.ndarray | None = None) -> np.ndarray:
+    """Points along the given edges at most ``spacing`` apart, with their ends and the points ``also`` (indices).
+
+    For a part of the curve graph (the wide edges): :func:`curve_samples`
+    adds every point of the graph, and a tube as wide as the wide edges'
+    round every curve vertex swallows whole sheets between curves that
+    are not wide (fuzz s4-750: a patch between three double curves, 15
+    cells across, all tube and so without a rail or a strip).
+    """
+    extra = np.asarray(points, float)[np.asarray(also, np.int64)] if also is not None else np.zeros((0, 3))
+    if len(edges) == 0:
+        return extra
+    used, inverse = np.unique(edges, return_inverse=True)
+    return np.vstack([curve_samples(np.asarray(points, float)[used], inverse.reshape(edges.shape), spacing), extra])
+
+
+def wide_vertices(curves) -> np.ndarray:
+    """Indices of the curve points the wide tube goes round besides its edges: every vertex of a piece with a wide edge.
+
+    A piece wide on a stretch only (its cusp's coefficient varying along
+    it) has tangent half-sheets past that stretch too: the lens round the
+    cuspidal edge of fuzz s3-925, thinner than a cell, needs the wide tube
+    along the whole piece (else its tip is left out, 4 cells from the mesh).
+    Pieces without a wide edge keep the usual tube.
+    """
+    wide = tangent_edges(curves)
+    if not wide.any():
+        return np.zeros(0, np.int64)
+    n = len(curves.points)
+    e = np.sort(curves.edges[wide], axis=1)
+    keys = e[:, 0] * n + e[:, 1]
+    out = [e.ravel()]
+    for c in curves.pieces:
+        # A wide edge of the piece's own, not a wide piece's end it shares
+        # (a triple point where a wide edge meets double curves).
+        v = np.asarray(c.vertices, np.int64) if c.vertices is not None else np.zeros(0, np.int64)
+        pairs = np.sort(np.stack([v[:-1], v[1:]], axis=1), axis=1)
+        if len(pairs) and np.isin(pairs[:, 0] * n + pairs[:, 1], keys).any():
+            out.append(v)
+    return np.unique(np.concatenate(out))
 
 
 def untraced_points(curves, spacing: float) -> np.ndarray:
@@ -296,15 +338,21 @@ def untraced_points(curves, spacing: float) -> np.ndarray:
 
 
 def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, edges: np.ndarray,
-                   pad: float, block: int = 8) -> np.ndarray:
+                   pad: float, block: int = 8, also: np.ndarray | None = None) -> np.ndarray:
     """Boxes (k, 2, 3) covering the curve with ``pad`` fine cells to spare.
 
     The blocks of ``block`` fine cells the curve passes through, widened:
     few regions for a long curve (the subdivision tests every box against
-    every region).
+    every region).  With ``also`` (indices of points) the edges, their ends
+    and those points only (:func:`edge_samples`), else every point of the
+    graph too.
     """
     cell = (tree_box[:, 1] - tree_box[:, 0]) / (1 << fine_level)
-    s = curve_samples(points, edges, 0.5 * float(cell.min()) * block) if len(edges) else np.zeros((0, 3))
+    spacing = 0.5 * float(cell.min()) * block
+    if also is not None:
+        s = edge_samples(points, edges, spacing, also)
+    else:
+        s = curve_samples(points, edges, spacing) if len(edges) else np.zeros((0, 3))
     lattice = np.floor((s - tree_box[:, 0]) / (cell * block)).astype(np.int64)
     blocks = np.unique(lattice, axis=0)
     lo = tree_box[:, 0] + blocks * cell * block - pad * cell
@@ -314,7 +362,8 @@ def _block_regions(tree_box: np.ndarray, fine_level: int, points: np.ndarray, ed
 
 def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
                  balls: np.ndarray | None = None, wide: np.ndarray | None = None,
-                 wide_radius: float = tol.CURVE_TANGENT_RADIUS, meets: np.ndarray | None = None) -> np.ndarray:
+                 wide_radius: float = tol.CURVE_TANGENT_RADIUS, meets: np.ndarray | None = None,
+                 wide_also: np.ndarray | None = None) -> np.ndarray:
     """Which leaves form the tube around the curve graph (points, edges).
 
     Around the points ``balls`` (pinch and triple points, where sheets
@@ -324,7 +373,9 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
     the square of the distance) the tube's radius is ``wide_radius``
     cells, so that the sheets are apart where they leave it.
     Around the points ``meets`` (cuspidal edges crossing) every leaf within
-    ``CURVE_MEET_BALL`` cells is tube.
+    ``CURVE_MEET_BALL`` cells is tube.  The wide tube goes round the wide
+    edges, their ends and the points ``wide_also`` (indices), no other
+    point (:func:`wide_vertices`).
 
     Returns
     -------
@@ -342,7 +393,11 @@ def _tube_leaves(tree: Octree, links, points: np.ndarray, edges: np.ndarray,
         sel = wide == flag
         if not sel.any():
             continue
-        s = (curve_samples(points, edges[sel], 0.25 * float(tree.cell.min())) - tree.box[:, 0]) / tree.cell
+        # The wide tube round the wide edges (and wide_also) only; the
+        # narrow one round every point of the graph too.
+        spacing = 0.25 * float(tree.cell.min())
+        s = edge_samples(points, edges[sel], spacing, wide_also) if flag else curve_samples(points, edges[sel], spacing)
+        s = (s - tree.box[:, 0]) / tree.cell
         grow_to = radius - tol.CURVE_TUBE_RADIUS + tol.CURVE_TUBE_GROW
         dist, _ = cKDTree(s).query(centre, p=np.inf, distance_upper_bound=float(half.max()) + grow_to + 1)
         inside |= dist <= half + radius
