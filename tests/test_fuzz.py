@@ -1411,6 +1411,10 @@ OPEN_CASES = [
     (4, 410, "traces of the double curve 4.5 cells apart at fine 64 share a tube one level finer too "
              "(9.1 cells): 45 edges of six or eight triangles; clean with two levels (open12, "
              "318f1c3), which broke s3-950 and the Seepferdchen"),
+    (4, 746, "a cuspidal edge (-5/7 z^3 - 9/4 x^2 y, its y-axis) times a plane: 2 lattice roots 6.5 cells "
+             "off the mesh at (0.23, 0.5, -0.09), between the sheets beside two short pieces read as corank-2 "
+             "edges.  Clean on main 965fd82 only where those pieces' wide tube went round every curve "
+             "vertex (as s4-893; and only under some PYTHONHASHSEED values, before 530989b)"),
     (4, 893, "the x-axis is read as two A1 double curves and a short corank-2 edge between them, but across "
              "it F ~ 1.1 x^2 z^4 - 2.7 y^6 (sheets tangent, not crossing): 3 lattice roots 2.0 cells off the "
              "mesh 6 cells from the axis at x = -0.375.  Clean on main 965fd82 only because the corank-2 "
