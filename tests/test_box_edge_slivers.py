@@ -54,13 +54,17 @@ def _sphere(centre, radius) -> str:
     return f"((x - {x})^2 + (y - {y})^2 + (z - {z})^2 - {radius:.15g}^2)"
 
 
-def _sphere_points(centre, radius, n: int = 200000) -> np.ndarray:
-    """Points of the sphere inside the box (a Fibonacci lattice on it)."""
+def _directions(n: int) -> np.ndarray:
+    """``n`` unit vectors spread evenly (a Fibonacci lattice on the sphere)."""
     k = np.arange(n) + 0.5
     phi = np.arccos(1 - 2 * k / n)
     theta = np.pi * (1 + 5 ** 0.5) * k
-    d = np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)], axis=1)
-    p = centre + radius * d
+    return np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)], axis=1)
+
+
+def _sphere_points(centre, radius, n: int = 200000) -> np.ndarray:
+    """Points of the sphere inside the box."""
+    p = centre + radius * _directions(n)
     return p[(np.abs(p) <= 1.0).all(axis=1)]
 
 
@@ -160,12 +164,8 @@ def _quadric_text(A, centre) -> str:
 
 def _ellipsoid_points(A, centre, n: int = 400000) -> np.ndarray:
     """Points of the ellipsoid inside the box."""
-    k = np.arange(n) + 0.5
-    phi = np.arccos(1 - 2 * k / n)
-    theta = np.pi * (1 + 5 ** 0.5) * k
-    d = np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)], axis=1)
     w, q = np.linalg.eigh(A)
-    p = centre + (d * w ** -0.5) @ q.T
+    p = centre + (_directions(n) * w ** -0.5) @ q.T
     return p[(np.abs(p) <= 1.0).all(axis=1)]
 
 
