@@ -613,7 +613,7 @@ def _find_skeleton_nodes(surf: Surface, box: np.ndarray, level: int):
         return skeleton_nodes(surf, box, level=level)
 
 
-def _why_empty(surface: Surface, box: np.ndarray, fine: int | None = None) -> str:
+def _why_empty(surface: Surface, box: np.ndarray, fine: int) -> str:
     """One line saying why the mesh of ``surface`` in ``box`` is empty.
 
     Raises
@@ -644,10 +644,10 @@ def _why_empty(surface: Surface, box: np.ndarray, fine: int | None = None) -> st
             # 0.002 apart between lattice planes 0.0625 apart).  An empty
             # mesh would be a wrong answer; say what to change.
             at = ", ".join(f"{c:.6g}" for c in other)
-            cell = "" if fine is None else f" ({float(np.max(box[:, 1] - box[:, 0])) / fine:.3g})"
+            cell = float(np.max(box[:, 1] - box[:, 0])) / fine
             raise SurfaceError(
                 f"F = {surface} changes sign near ({at}) between lattice points: the surface there is "
-                f"thinner than a fine cell{cell} and no lattice edge meets it; raise fine or shrink the box")
+                f"thinner than a fine cell ({cell:.3g}) and no lattice edge meets it; raise fine or shrink the box")
         # F touches 0 without changing sign (-|z|, -(x^2 + y^2)): such
         # zeros bound no solid and are not meshed; saying "both signs"
         # would send the user looking for a zero that is not missing.
@@ -662,12 +662,12 @@ def _why_empty(surface: Surface, box: np.ndarray, fine: int | None = None) -> st
 def _other_sign_near(surface: Surface, box: np.ndarray, p: np.ndarray, sign: float, scale: float) -> np.ndarray | None:
     """A point near the zero ``p`` where F has ``sign`` above ``EMPTY_TOUCH`` of ``scale``, or None.
 
-    Steps of 1e-2 down to 1e-9 of the box along the axes from ``p``: a
+    Steps of ``EMPTY_CROSS_STEPS`` of the box along the axes from ``p``: a
     zero where F crosses has the other sign on one side at some step; one
     where F only touches 0 (-|z|, a double root) has not.
     """
     size = float(np.max(box[:, 1] - box[:, 0]))
-    steps = size * 10.0 ** -np.arange(2, 10)
+    steps = size * np.asarray(tol.EMPTY_CROSS_STEPS)
     dirs = np.concatenate([np.eye(3), -np.eye(3)])
     q = np.clip(p + (steps[:, None, None] * dirs[None]).reshape(-1, 3), box[:, 0], box[:, 1])
     with np.errstate(all="ignore"):

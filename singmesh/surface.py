@@ -911,17 +911,22 @@ def _check_degree_bound(expr: sympy.Expr) -> None:
                            "(Bernstein forms lose too much precision beyond it)")
 
 
-def polynomial_fraction(expr: sympy.Expr):
-    """(N, D), coprime polynomials with F = N / D, for a rational F that is not a polynomial; else None."""
+def _cancelled(expr: sympy.Expr):
+    """(N, D), coprime polynomials with F = N / D, for a rational F in x, y, z; else None."""
     if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
         return None
     try:
-        num, den = sympy.fraction(sympy.cancel(sympy.together(expr)))
+        return sympy.fraction(sympy.cancel(sympy.together(expr)))
     except (TypeError, ValueError, sympy.PolynomialError):  # pragma: no cover - sympy cannot combine it
         return None
-    if not den.free_symbols:
+
+
+def polynomial_fraction(expr: sympy.Expr):
+    """(N, D), coprime polynomials with F = N / D, for a rational F that is not a polynomial; else None."""
+    fraction = _cancelled(expr)
+    if fraction is None or not fraction[1].free_symbols:
         return None
-    return num, den
+    return fraction
 
 
 def removable_fraction(expr: sympy.Expr):
@@ -931,7 +936,8 @@ def removable_fraction(expr: sympy.Expr):
     extension.  (The parser reads decimals exactly, so a factor typed
     with 15-digit coefficients cancels exactly too.)
     """
-    if not expr.is_rational_function(*VARIABLES) or not expr.free_symbols <= set(VARIABLES):
+    fraction = _cancelled(expr)
+    if fraction is None or fraction[1].free_symbols:
         return None
     # (the divisors as written: sympy's together may already cancel them)
     divisors = list(dict.fromkeys(node.base for node in sympy.preorder_traversal(expr)
@@ -939,13 +945,7 @@ def removable_fraction(expr: sympy.Expr):
                                   and node.base.free_symbols))
     if not divisors:
         return None
-    try:
-        p, q = sympy.fraction(sympy.cancel(sympy.together(expr)))
-    except (TypeError, ValueError, sympy.PolynomialError):  # pragma: no cover - sympy cannot combine it
-        return None
-    if q.free_symbols:
-        return None
-    return sympy.expand(p / q), sympy.Mul(*divisors)
+    return sympy.expand(fraction[0] / fraction[1]), sympy.Mul(*divisors)
 
 
 def _is_polynomial(expr: sympy.Expr) -> bool:

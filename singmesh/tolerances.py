@@ -1144,6 +1144,11 @@ DISPLAY_DIGITS = 30
 #: (Nelder-Mead reaches rounding level at a kink or a double root).
 EMPTY_TOUCH_STARTS = 4
 EMPTY_TOUCH = 1e-12
+#: Steps (fractions of the box) from such a zero along the axes that tell
+#: a crossing from a touching: sheets 0.002 apart on a box of 4 ((x -
+#: 0.013)^2 - 1e-6) have the other sign 1e-5 of the box from either; a
+#: touching (-|z|, a double root) shows no other sign at any of them.
+EMPTY_CROSS_STEPS = tuple(10.0 ** -k for k in range(2, 10))
 
 #: Steps per side of a square in which the face curve is followed to pair
 #: the events of an ambiguous square on the box's boundary (two sheets'
